@@ -1,0 +1,30 @@
+// unjam: mechanics of jammed packings of rigid frictional disks.
+#include <cstdio>
+#include <exception>
+
+#include "cli/commands.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/core/version.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"unjam: jammed packings of rigid frictional disks (contact dynamics, local "
+               "perturbation probe, force-network ensemble)"};
+  app.set_version_flag("--version", unjam::kVersion);
+  app.require_subcommand(1);
+  unjam::cli::add_pack_command(app);
+  unjam::cli::add_info_command(app);
+  unjam::cli::add_bounds_command(app);
+  unjam::cli::add_ensemble_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const unjam::Error& e) {
+    std::fprintf(stderr, "unjam: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "unjam: internal error: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,30 @@
+#pragma once
+// One contact of the packing: the plain data shared by the solvers, the static checks,
+// the linear programs and the probe (one row of contacts.csv).
+//
+// Sign conventions (PHYSICS.md section 2):
+//   l = r_b - r_a (minimum image), n = l / |l|, t = (-n_y, n_x),
+//   gap = |l| - R_a - R_b (negative: overlap),
+//   the force on b is fn n + ft t, the force on a is -(fn n + ft t); fn >= 0 is compressive,
+//   torques: T_a = -R_a ft, T_b = -R_b ft.
+#include <vector>
+
+#include "unjam/core/vec2.hpp"
+
+namespace unjam {
+
+struct Contact {
+  int a = 0, b = 0;
+  Vec2 n = Vec2::Zero();
+  Vec2 l = Vec2::Zero();
+  double gap = 0.0;
+  double fn = 0.0;
+  double ft = 0.0;
+
+  Vec2 t() const { return tangent(n); }
+  Vec2 force_on_b() const { return fn * n + ft * t(); }
+};
+
+using Contacts = std::vector<Contact>;
+
+}  // namespace unjam

@@ -1,0 +1,44 @@
+#pragma once
+// A packing: grains, cell, contacts and the record of how it was made.
+// On disk it is a directory (meta.json, particles.csv, contacts.csv), see docs/packing-format.md.
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "unjam/core/cell.hpp"
+#include "unjam/packing/contact.hpp"
+#include "unjam/packing/particles.hpp"
+
+namespace unjam {
+
+// State of the pressure bath and the clock, enough to resume a run exactly.
+struct RunState {
+  double time = 0.0;            // simulated time (units of t0)
+  std::int64_t step = 0;        // time steps taken
+  double lambda = 0.0;          // strain rate of the cell, Ldot / L (1/t0)
+  bool is_static = false;       // true once the compaction reached a static packing
+};
+
+struct PackingMeta {
+  double P_ext = 1.0;           // external pressure (pressure unit)
+  double mu = 0.0;              // Coulomb friction coefficient
+  std::uint64_t seed = 0;       // seed of the gas the packing was compacted from
+  nlohmann::json settings = nlohmann::json::object();  // solver and protocol settings
+  std::string command;          // the command line that made it
+  std::string program_version;  // unjam version that wrote it
+};
+
+struct Packing {
+  Cell cell;
+  Particles particles;
+  Contacts contacts;
+  PackingMeta meta;
+  RunState state;
+
+  std::size_t size() const { return particles.size(); }
+  double mean_radius() const;
+  double force_unit() const;  // F0 = 2 R_avg P_ext
+};
+
+}  // namespace unjam
