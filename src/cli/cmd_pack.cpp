@@ -1,5 +1,165 @@
-// PLACEHOLDER: replaced by the real command.
+// `unjam pack`: compacts a gas of disks under the pressure bath into a static packing
+// (PHYSICS.md section 5), or continues from an existing packing: resume a stopped run in
+// place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
+#include <omp.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
 #include "cli/commands.hpp"
+#include "cli/run_info.hpp"
+#include "unjam/analysis/packing_stats.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/packing/packing_io.hpp"
+#include "unjam/protocol/compaction.hpp"
+#include "unjam/protocol/gas.hpp"
+#include "unjam/protocol/settings_json.hpp"
+
 namespace unjam::cli {
-void add_pack_command(CLI::App& app) { app.add_subcommand("pack", "(not yet built)"); }
+namespace {
+
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int sig) { g_signal = sig; }
+
+struct PackOptions {
+  GasSettings gas;
+  CompactionSettings compaction;
+  double mu = 0.1;
+  double P_ext = 1.0;
+  std::string out;
+  std::string from;
+  std::string resume;
+  int threads = 0;
+  double checkpoint_s = 60.0;
+  bool quiet = false;
+  std::string command;
+};
+
+void print_progress(const CompactionProgress& pr) {
+  std::string eta = pr.eta_s >= 0.0 ? format_duration(pr.eta_s) : "?";
+  std::fprintf(stderr,
+               "step %8lld  t %9.2f  phi %.4f  P_in/P_ext %.4f  <v> %.2e  sweeps/step %6.1f  "
+               "contacts %6d  static tries %d  elapsed %s  ETA ~%s\n",
+               static_cast<long long>(pr.step), pr.time, pr.phi, pr.P_ratio, pr.v_mean,
+               pr.sweeps_per_step, pr.contacts, pr.static_attempts,
+               format_duration(pr.elapsed_s).c_str(), eta.c_str());
+}
+
+void run(PackOptions& o) {
+  Packing p;
+  std::filesystem::path out = o.out;
+  if (!o.resume.empty()) {
+    // Continue in place with the settings the run was started with.
+    p = read_packing(o.resume);
+    from_json(p.meta.settings, o.compaction, o.gas);
+    out = o.resume;
+    if (p.state.is_static) {
+      std::fprintf(stderr, "%s is already static; nothing to do\n", o.resume.c_str());
+      return;
+    }
+  } else {
+    if (o.out.empty()) throw Error("--out is required (or --resume DIR)");
+    if (!o.from.empty()) {
+      p = read_packing(o.from);
+      from_json(p.meta.settings, o.compaction, o.gas);
+      p.meta.mu = o.mu;
+      p.meta.P_ext = o.P_ext;
+    } else {
+      p = make_gas(o.gas);
+      p.meta.mu = o.mu;
+      p.meta.P_ext = o.P_ext;
+    }
+  }
+  o.compaction.dynamics.bath.P_ext = p.meta.P_ext;
+  validate(o.compaction, p.meta.mu);
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  p.meta.settings = to_json(o.compaction, o.gas);
+  p.meta.command = o.command;
+
+  CompactionHooks hooks;
+  if (!o.quiet) {
+    hooks.progress = print_progress;
+    hooks.attempt = [](std::int64_t step, double v, const StaticSolveReport& r) {
+      if (r.converged) return;
+      std::fprintf(stderr,
+                   "step %lld: static solve attempt (<v> %.1e): not static yet (residual %.1e F0 "
+                   "after %d sweeps); dynamics goes on\n",
+                   static_cast<long long>(step), v, r.max_residual_F0, r.sweeps);
+    };
+  }
+  hooks.checkpoint = [&](const Packing& q) { write_packing(out, q); };
+  hooks.checkpoint_s = o.checkpoint_s;
+  hooks.should_stop = [] { return g_signal != 0; };
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  std::fprintf(stderr, "unjam pack: N = %zu, mu = %g, P_ext = %g, threads = %d -> %s\n", p.size(),
+               p.meta.mu, p.meta.P_ext, omp_get_max_threads(), out.c_str());
+  const CompactionResult r = compact(p, o.compaction, hooks);
+  write_packing(out, p);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+
+  if (!r.is_static) {
+    std::fprintf(stderr,
+                 "%s after %lld steps; the packing is not static yet and was saved to %s\n"
+                 "resume with: unjam pack --resume %s\n",
+                 r.stopped ? "stopped" : "step limit reached", static_cast<long long>(r.steps),
+                 out.c_str(), out.c_str());
+    if (r.stopped) throw Error("interrupted (state saved)");
+    throw Error("no static packing within --max-steps");
+  }
+  const PackingStats s = compute_packing_stats(p);
+  std::printf("static packing written to %s\n", out.c_str());
+  std::printf("  N %zu  mu %g  phi %.4f  z %.3f  rattlers %zu  contacts carrying force %zu\n", s.N,
+              s.mu, s.phi, s.z, s.rattlers, s.N_c);
+  std::printf("  <F_cont>/F0 %.4f  max overlap %.2e  max residual %.1e F0  P_in/P_ext %.12f\n",
+              s.F_cont, s.max_overlap, s.max_force_residual, s.pressure_ratio);
+  if (s.isostatic_excess)
+    std::printf("  isostatic count (contacts - (2N'-1)): %lld\n", static_cast<long long>(*s.isostatic_excess));
+  std::printf("  %lld steps, %lld sweeps (%.1f per step), %d static solve attempt(s), %s wall, "
+              "%.1f M contact updates/s\n",
+              static_cast<long long>(r.steps), static_cast<long long>(r.sweeps),
+              static_cast<double>(r.sweeps) / std::max<std::int64_t>(1, r.steps), r.static_attempts,
+              format_duration(r.wall_s).c_str(), r.contact_updates / std::max(r.wall_s, 1e-9) / 1e6);
+}
+
+}  // namespace
+
+void add_pack_command(CLI::App& app) {
+  auto o = std::make_shared<PackOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "pack", "compact a gas of disks into a static packing (or continue from a packing)");
+  auto& d = o->compaction.dynamics;
+  auto& st = o->compaction;
+  cmd->add_option("--n", o->gas.N, "number of disks (radii uniform in [0.5, 1])")->capture_default_str();
+  cmd->add_option("--mu", o->mu, "Coulomb friction coefficient")->capture_default_str();
+  cmd->add_option("--seed", o->gas.seed, "seed of the random gas")->capture_default_str();
+  cmd->add_option("--out", o->out, "output packing directory");
+  cmd->add_option("--from", o->from, "start from this packing (re-relax at --mu / --p-ext) instead of a gas");
+  cmd->add_option("--resume", o->resume, "continue a stopped compaction in place, with its settings");
+  cmd->add_option("--p-ext", o->P_ext, "external pressure P_ext (pressure unit)")->capture_default_str();
+  cmd->add_option("--phi-gas", o->gas.phi, "packing fraction of the initial gas")->capture_default_str();
+  cmd->add_option("--dt", d.dt, "time step (t0 = R_max sqrt(rho/P_ext) at P_ext = 1)")->capture_default_str();
+  cmd->add_option("--m-lambda", d.bath.M_lambda, "bath mass M_lambda")->capture_default_str();
+  cmd->add_option("--tol", d.nlgs.tol, "NLGS tolerance alpha of the dynamics (force-change criterion)")->capture_default_str();
+  cmd->add_option("--max-sweeps", d.nlgs.max_sweeps, "NLGS max sweeps per step of the dynamics")->capture_default_str();
+  cmd->add_option("--detect", d.min_detection, "smallest contact detection distance (R_max)")->capture_default_str();
+  cmd->add_option("--v-static", st.v_static, "try the static solve below this mean speed of loaded grains")->capture_default_str();
+  cmd->add_option("--p-static", st.p_static, "... and when |P_in/P_ext - 1| is below this")->capture_default_str();
+  cmd->add_option("--static-tol", st.final_solve.tol, "static residual target (force, torque / F0; pressure)")->capture_default_str();
+  cmd->add_option("--touch-gap", st.final_solve.touch_gap, "pairs closer than this touch in the static solve (R_max)")->capture_default_str();
+  cmd->add_option("--max-steps", st.max_steps, "give up after this many steps")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
+  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints written to --out")->capture_default_str();
+  cmd->add_flag("--quiet", o->quiet, "no progress lines");
+  cmd->callback([o] {
+    o->command = command_line();
+    run(*o);
+  });
+}
+
 }  // namespace unjam::cli

@@ -3,6 +3,7 @@
 #include <exception>
 
 #include "cli/commands.hpp"
+#include "cli/run_info.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 
@@ -11,6 +12,7 @@ int main(int argc, char** argv) {
                "perturbation probe, force-network ensemble)"};
   app.set_version_flag("--version", unjam::kVersion);
   app.require_subcommand(1);
+  unjam::cli::set_command_line(argc, argv);
   unjam::cli::add_pack_command(app);
   unjam::cli::add_info_command(app);
   unjam::cli::add_bounds_command(app);

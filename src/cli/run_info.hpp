@@ -1,0 +1,14 @@
+#pragma once
+// What every command records and prints about its own run: the command line that started
+// it (stored in every output) and durations in a readable form.
+#include <string>
+
+namespace unjam::cli {
+
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
+
+// "42.0 s", "3 min 05 s", "2 h 10 min".
+std::string format_duration(double seconds);
+
+}  // namespace unjam::cli

@@ -1,0 +1,105 @@
+#pragma once
+// Exact per-contact intervals of the normal force over the admissible force networks
+// (PHYSICS.md section 7):
+//   [fn_min_k, fn_max_k] = [min, max] fn_k  over  { A x = rhs, fn >= 0, |ft| <= mu fn }
+// with A the balance and pressure rows of equilibrium_matrix.hpp. Each end is a linear
+// program, solved with COIN-OR CLP in Coulomb-cone coordinates y >= 0 (the Coulomb cone and
+// fn >= 0 become plain column bounds, the only rows are the equalities). The model is built
+// once; each further LP changes only the objective and re-solves warm-started from the
+// previous optimal basis. fn_max_k is the bound on the critical force F_crit of contact k
+// (PHYSICS.md section 6).
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "unjam/ensemble/equilibrium_matrix.hpp"
+
+class ClpSimplex;
+
+namespace unjam {
+
+// One admissible force network, per contact of the system (force units of the packing).
+struct ForceNetwork {
+  Eigen::VectorXd fn, ft;
+};
+
+// State of a contact in a network: open (fn = 0), sliding (mu > 0 and |ft| = mu fn > 0)
+// or closed (fn > 0 and |ft| < mu fn, or mu = 0).
+enum class ContactState { closed, sliding, open };
+
+// Classifies every contact; `tol` is an absolute force tolerance: open if fn <= tol,
+// sliding if mu fn - |ft| <= tol.
+std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol);
+
+// How each LP is solved (timings in docs/ensemble.md):
+//   barrier  CLP's interior-point method without crossover, every LP from scratch. Its cost
+//            grows like one sparse Cholesky per iteration; the fastest at every size
+//            measured. The optimal network it returns lies inside the optimal face.
+//   simplex  primal simplex warm-started from the previous optimal basis (one model for the
+//            minima, one for the maxima; dual simplex measured no faster: CLP falls back to
+//            primal because a changed objective leaves the basis dual infeasible). The
+//            optimal network is a vertex. Pivots per LP grow with the system size (the
+//            optimal bases of two contacts differ over the whole packing), so the time per
+//            contact grows about like N^2.
+enum class LpMethod { barrier, simplex };
+
+// The LP over the admissible set of one system, re-solved for one objective after another.
+// Copyable: each copy owns its own CLP models and bases (one per thread).
+class ForceLP {
+ public:
+  // Builds the model and finds a first admissible network (dual simplex). Throws
+  // unjam::Error ("no admissible force network: ...") when the set is empty.
+  // `tolerance`: CLP's primal and dual feasibility tolerance (absolute, on the scaled model).
+  explicit ForceLP(const EquilibriumSystem& system, LpMethod method = LpMethod::barrier,
+                   double tolerance = 1e-9);
+  ForceLP(const ForceLP& other);
+  ForceLP& operator=(const ForceLP&) = delete;
+  ~ForceLP();
+
+  // min / max of fn_k over the admissible set (k: position in system.contacts).
+  double min_fn(int k);
+  double max_fn(int k);
+
+  // The optimal network of the last solve (an argmin / argmax of the last objective).
+  ForceNetwork network() const;
+
+  // Simplex and barrier iterations summed over every solve of this object.
+  long long iterations() const { return iterations_; }
+
+ private:
+  double optimize(int k, double direction);
+
+  const EquilibriumSystem* system_;
+  LpMethod method_;
+  std::unique_ptr<ClpSimplex> min_model_, max_model_;  // the same LP, one basis per sense
+  ClpSimplex* last_ = nullptr;                         // model of the last solve
+  int per_contact_;  // cone columns per contact (2 if mu > 0, else 1)
+  int min_k_ = -1, max_k_ = -1;  // contact whose fn is each model's current objective
+  long long iterations_ = 0;
+};
+
+struct ForceBoundsOptions {
+  int threads = 1;                  // OpenMP threads, one ForceLP copy each
+  LpMethod method = LpMethod::barrier;
+  double tolerance = 1e-9;          // CLP feasibility tolerance, see ForceLP
+  bool keep_networks_at_max = false;  // store the argmax network of every contact
+  // Called now and then from one thread with (contacts done, total); may be empty.
+  std::function<void(int, int)> progress;
+};
+
+struct ForceBounds {
+  Eigen::VectorXd fn_min, fn_max;            // per contact of the system
+  std::vector<ForceNetwork> network_at_max;  // per contact, if keep_networks_at_max
+  long long iterations = 0;                  // solver iterations over all LPs
+  double seconds = 0.0;                      // wall time of all LPs (model build included)
+};
+
+// Both ends of every contact's interval. With several threads the contacts are split into
+// contiguous blocks; each LP optimum value is unique, so results agree with one thread up
+// to the solver tolerance.
+ForceBounds compute_force_bounds(const EquilibriumSystem& system,
+                                 const ForceBoundsOptions& options = {});
+
+}  // namespace unjam

@@ -1,0 +1,65 @@
+#include "unjam/protocol/settings_json.hpp"
+
+#include "unjam/core/error.hpp"
+
+namespace unjam {
+namespace {
+
+template <class T>
+void read(const nlohmann::json& j, const char* key, T& value) {
+  if (!j.contains(key)) return;
+  try {
+    value = j.at(key).get<T>();
+  } catch (const nlohmann::json::exception&) {
+    throw Error(std::string("settings: '") + key + "' has the wrong type");
+  }
+}
+
+}  // namespace
+
+nlohmann::json to_json(const CompactionSettings& s, const GasSettings& g) {
+  const auto& d = s.dynamics;
+  return {
+      {"gas", {{"N", g.N}, {"R_min", g.R_min}, {"R_max", g.R_max}, {"phi", g.phi}, {"seed", g.seed}}},
+      {"dynamics",
+       {{"dt", d.dt}, {"M_lambda", d.bath.M_lambda}, {"nlgs_tol", d.nlgs.tol},
+        {"nlgs_max_sweeps", d.nlgs.max_sweeps}, {"min_detection", d.min_detection}}},
+      {"static",
+       {{"v_static", s.v_static}, {"p_static", s.p_static}, {"attempt_budget", s.attempt_budget},
+        {"tol", s.final_solve.tol}, {"polish_from", s.final_solve.polish_from},
+        {"touch_gap", s.final_solve.touch_gap}, {"max_sweeps", s.final_solve.max_sweeps}}},
+  };
+}
+
+void from_json(const nlohmann::json& j, CompactionSettings& s, GasSettings& g) {
+  if (!j.is_object()) return;
+  if (j.contains("gas")) {
+    const auto& x = j["gas"];
+    read(x, "N", g.N);
+    read(x, "R_min", g.R_min);
+    read(x, "R_max", g.R_max);
+    read(x, "phi", g.phi);
+    read(x, "seed", g.seed);
+  }
+  if (j.contains("dynamics")) {
+    const auto& x = j["dynamics"];
+    auto& d = s.dynamics;
+    read(x, "dt", d.dt);
+    read(x, "M_lambda", d.bath.M_lambda);
+    read(x, "nlgs_tol", d.nlgs.tol);
+    read(x, "nlgs_max_sweeps", d.nlgs.max_sweeps);
+    read(x, "min_detection", d.min_detection);
+  }
+  if (j.contains("static")) {
+    const auto& x = j["static"];
+    read(x, "v_static", s.v_static);
+    read(x, "p_static", s.p_static);
+    read(x, "attempt_budget", s.attempt_budget);
+    read(x, "tol", s.final_solve.tol);
+    read(x, "polish_from", s.final_solve.polish_from);
+    read(x, "touch_gap", s.final_solve.touch_gap);
+    read(x, "max_sweeps", s.final_solve.max_sweeps);
+  }
+}
+
+}  // namespace unjam

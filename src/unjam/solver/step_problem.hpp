@@ -1,0 +1,35 @@
+#pragma once
+// The frictional contact problem of one contact-dynamics time step (PHYSICS.md sections
+// 3 and 4): the data the solver needs besides its unknowns. The unknowns live in the
+// caller's Contacts (forces fn, ft; geometry read only) and Particles (velocities: free
+// velocities in, velocities at t+dt out).
+#include <vector>
+
+#include "unjam/core/cell.hpp"
+#include "unjam/packing/contact.hpp"
+
+namespace unjam {
+
+// Andersen-type pressure bath: M_lambda dlambda/dt = P_in - P_ext, lambda = Ldot/L.
+struct Bath {
+  bool enabled = true;    // false: the cell strain rate stays lambda_t (0 for a fixed cell)
+  double P_ext = 1.0;     // external pressure
+  double M_lambda = 100.0;  // inertia of the cell (mass units per area; [A] uses 100)
+};
+
+struct StepProblem {
+  Cell cell;                   // cell at time t; V = Lx Ly
+  double dt = 0.01;            // time step (simulation time units)
+  double mu = 0.0;             // Coulomb friction coefficient
+  Bath bath;
+  double lambda_t = 0.0;       // cell strain rate at time t
+  // Per contact, the gap the step must respect: the contact closes when
+  // g_eff + dt U*_n <= 0. max(gap, 0) by default (PHYSICS.md section 3: no overlap
+  // correction); -g for the probe's opened contact (section 6).
+  std::vector<double> g_eff;
+};
+
+// g_eff = max(gap, 0) for every contact.
+std::vector<double> positive_gaps(const Contacts& contacts);
+
+}  // namespace unjam

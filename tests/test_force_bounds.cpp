@@ -1,0 +1,238 @@
+// Exact per-contact normal-force intervals by LP: fixtures against an independent LP (HiGHS),
+// hand-made systems with known answers, monotonicity in mu, the command-line tool.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "unjam/core/error.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/packing/packing_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using unjam::Contact;
+using unjam::Packing;
+
+std::string fixture_dir(const char* name) { return std::string(UNJAM_FIXTURES_DIR) + "/" + name; }
+
+struct Reference {
+  int a, b;
+  double fn, fn_min, fn_max;
+};
+
+std::vector<Reference> read_reference(const std::string& dir) {
+  std::ifstream in(dir + "/bounds-reference.csv");
+  std::string line;
+  std::getline(in, line);  // header a,b,fn,fn_min,fn_max
+  std::vector<Reference> rows;
+  while (std::getline(in, line)) {
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream s(line);
+    Reference r{};
+    s >> r.a >> r.b >> r.fn >> r.fn_min >> r.fn_max;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// A contact from a to b with branch vector l (minimum image chosen by hand).
+Contact contact(int a, int b, unjam::Vec2 l) {
+  Contact c;
+  c.a = a;
+  c.b = b;
+  c.l = l;
+  c.n = l.normalized();
+  return c;
+}
+
+// Two disks R = 0.5 in a periodic 2 x 10 cell, touching along x directly and through the
+// periodic image. x-balance: fn_0 = fn_1; torque and y balance: ft = 0; pressure:
+// (fn_0 + fn_1) |l| = 2 V P_ext = 40, so fn = 20 exactly, for any mu.
+Packing two_disk_chain(double mu) {
+  Packing p;
+  p.cell = {2.0, 10.0};
+  p.meta.mu = mu;
+  p.particles.resize(2);
+  p.particles.x = {0.5, 1.5};
+  p.particles.y = {5.0, 5.0};
+  p.particles.radius = {0.5, 0.5};
+  p.contacts = {contact(0, 1, {1, 0}), contact(1, 0, {1, 0})};
+  for (auto& c : p.contacts) c.fn = 20.0;
+  return p;
+}
+
+// Four disks R = 0.5 on a square lattice in a periodic 2 x 2 cell: two horizontal and two
+// vertical chains of two contacts. At mu = 0 each chain carries one force h_A, h_B, v_A, v_B
+// >= 0 with 2 (h_A + h_B + v_A + v_B) = 2 V P_ext = 8: every interval is [0, 4].
+Packing square_lattice(double mu) {
+  Packing p;
+  p.cell = {2.0, 2.0};
+  p.meta.mu = mu;
+  p.particles.resize(4);
+  p.particles.x = {0.5, 1.5, 0.5, 1.5};
+  p.particles.y = {0.5, 0.5, 1.5, 1.5};
+  p.particles.radius = {0.5, 0.5, 0.5, 0.5};
+  p.contacts = {contact(0, 1, {1, 0}), contact(1, 0, {1, 0}), contact(2, 3, {1, 0}),
+                contact(3, 2, {1, 0}), contact(0, 2, {0, 1}), contact(2, 0, {0, 1}),
+                contact(1, 3, {0, 1}), contact(3, 1, {0, 1})};
+  for (auto& c : p.contacts) c.fn = 1.0;
+  return p;
+}
+
+void expect_matches_reference(const char* name, unjam::LpMethod method, int threads) {
+  const Packing p = unjam::read_packing(fixture_dir(name));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const auto ref = read_reference(fixture_dir(name));
+  ASSERT_EQ(static_cast<int>(ref.size()), sys.num_contacts()) << name;
+  unjam::ForceBoundsOptions options;
+  options.method = method;
+  options.threads = threads;
+  const auto bounds = unjam::compute_force_bounds(sys, options);
+  const double F0 = p.force_unit();
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    const Contact& c = p.contacts[sys.contacts[k]];
+    ASSERT_EQ(c.a, ref[k].a);
+    ASSERT_EQ(c.b, ref[k].b);
+    EXPECT_NEAR(bounds.fn_min[k], ref[k].fn_min, 1e-6 * F0) << name << " contact " << k;
+    EXPECT_NEAR(bounds.fn_max[k], ref[k].fn_max, 1e-6 * F0) << name << " contact " << k;
+  }
+}
+
+TEST(ForceBounds, P50MatchesReferenceBarrier) {
+  expect_matches_reference("p50-mu0.1", unjam::LpMethod::barrier, 1);
+}
+TEST(ForceBounds, P50MatchesReferenceSimplex) {
+  expect_matches_reference("p50-mu0.1", unjam::LpMethod::simplex, 1);
+}
+TEST(ForceBounds, P50MatchesReferenceTwoThreads) {
+  expect_matches_reference("p50-mu0.1", unjam::LpMethod::barrier, 2);
+}
+TEST(ForceBounds, Lattice16MatchesReference) {
+  expect_matches_reference("lattice16", unjam::LpMethod::barrier, 1);
+  expect_matches_reference("lattice16", unjam::LpMethod::simplex, 1);
+}
+
+TEST(ForceBounds, PackingNetworkLiesInsideEveryInterval) {
+  for (const char* name : {"p50-mu0.1", "lattice16"}) {
+    const Packing p = unjam::read_packing(fixture_dir(name));
+    const auto sys = unjam::build_equilibrium_system(p);
+    const auto bounds = unjam::compute_force_bounds(sys);
+    const double tol = 1e-7 * p.force_unit();
+    for (int k = 0; k < sys.num_contacts(); ++k) {
+      const double fn = p.contacts[sys.contacts[k]].fn;
+      EXPECT_LE(bounds.fn_min[k], fn + tol) << name << " contact " << k;
+      EXPECT_GE(bounds.fn_max[k], fn - tol) << name << " contact " << k;
+    }
+  }
+}
+
+TEST(ForceBounds, TwoDiskChainIsDeterminateForAnyMu) {
+  for (double mu : {0.0, 0.5}) {
+    const Packing p = two_disk_chain(mu);
+    const auto sys = unjam::build_equilibrium_system(p);
+    for (auto method : {unjam::LpMethod::barrier, unjam::LpMethod::simplex}) {
+      unjam::ForceBoundsOptions options;
+      options.method = method;
+      const auto bounds = unjam::compute_force_bounds(sys, options);
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_NEAR(bounds.fn_min[k], 20.0, 1e-7) << "mu " << mu;
+        EXPECT_NEAR(bounds.fn_max[k], 20.0, 1e-7) << "mu " << mu;
+      }
+    }
+  }
+}
+
+TEST(ForceBounds, SquareLatticeAtMuZeroByHand) {
+  const Packing p = square_lattice(0.0);
+  const auto sys = unjam::build_equilibrium_system(p);
+  EXPECT_EQ(unjam::equilibrium_rank(sys).dimension, 3);  // 4 chain forces, 1 pressure row
+  const auto bounds = unjam::compute_force_bounds(sys);
+  for (int k = 0; k < 8; ++k) {
+    EXPECT_NEAR(bounds.fn_min[k], 0.0, 1e-7);
+    EXPECT_NEAR(bounds.fn_max[k], 4.0, 1e-7);
+  }
+}
+
+TEST(ForceBounds, RaisingMuOnlyWidensIntervals) {
+  Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto contacts = unjam::select_contacts(p);
+  const auto sys01 = unjam::build_equilibrium_system(p, contacts);
+  p.meta.mu = 0.3;
+  const auto sys03 = unjam::build_equilibrium_system(p, contacts);
+  const auto b01 = unjam::compute_force_bounds(sys01);
+  const auto b03 = unjam::compute_force_bounds(sys03);
+  const double tol = 1e-7 * p.force_unit();
+  double widening = 0.0;
+  for (int k = 0; k < sys01.num_contacts(); ++k) {
+    EXPECT_LE(b03.fn_min[k], b01.fn_min[k] + tol) << k;
+    EXPECT_GE(b03.fn_max[k], b01.fn_max[k] - tol) << k;
+    widening += (b03.fn_max[k] - b03.fn_min[k]) - (b01.fn_max[k] - b01.fn_min[k]);
+  }
+  EXPECT_GT(widening, 0.0);
+}
+
+TEST(ForceBounds, NetworkAtMaxIsAdmissibleAndAttainsTheMax) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  for (auto method : {unjam::LpMethod::barrier, unjam::LpMethod::simplex}) {
+    unjam::ForceBoundsOptions options;
+    options.method = method;
+    options.keep_networks_at_max = true;
+    const auto bounds = unjam::compute_force_bounds(sys, options);
+    ASSERT_EQ(static_cast<int>(bounds.network_at_max.size()), sys.num_contacts());
+    const double F0 = p.force_unit(), tol = 1e-7 * F0;
+    for (int k = 0; k < sys.num_contacts(); k += 7) {
+      const auto& net = bounds.network_at_max[k];
+      EXPECT_NEAR(net.fn[k], bounds.fn_max[k], 1e-9 * F0);
+      Eigen::VectorXd x(2 * sys.num_contacts());
+      for (int j = 0; j < sys.num_contacts(); ++j) {
+        x[2 * j] = net.fn[j];
+        x[2 * j + 1] = net.ft[j];
+        EXPECT_GE(net.fn[j], -tol);
+        EXPECT_LE(std::abs(net.ft[j]), sys.mu * net.fn[j] + tol);
+      }
+      EXPECT_LT((sys.A * x - sys.rhs).cwiseAbs().maxCoeff(), 1e-6 * F0);
+      const auto states = unjam::contact_states(net, sys.mu, 1e-9 * F0);
+      EXPECT_NE(states[k], unjam::ContactState::open);
+    }
+  }
+}
+
+TEST(ForceBounds, InfeasibleSystemIsReported) {
+  Packing p = two_disk_chain(0.5);
+  p.contacts.pop_back();  // one contact cannot balance: fn = 0, but P_ext needs fn > 0
+  const auto sys = unjam::build_equilibrium_system(p);
+  try {
+    unjam::compute_force_bounds(sys);
+    FAIL() << "expected unjam::Error";
+  } catch (const unjam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no admissible force network"), std::string::npos);
+  }
+}
+
+TEST(ForceBounds, CommandWritesCsvAndJson) {
+  const fs::path dir = fs::temp_directory_path() / "unjam_test_bounds_cmd";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  for (const char* f : {"meta.json", "particles.csv", "contacts.csv"})
+    fs::copy_file(fs::path(fixture_dir("p50-mu0.1")) / f, dir / f);
+  const std::string cmd = std::string(UNJAM_BINARY) + " bounds " + dir.string() + " > " +
+                          (dir / "stdout.txt").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream csv(dir / "bounds.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("a,b,fn,fn_min,fn_max", 0), 0u);
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 81);
+  EXPECT_TRUE(fs::exists(dir / "bounds.json"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
