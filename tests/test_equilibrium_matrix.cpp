@@ -4,7 +4,7 @@
 #include <Eigen/Dense>
 
 #include "unjam/core/error.hpp"
-#include "unjam/ensemble/equilibrium_matrix.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace {

@@ -14,7 +14,7 @@
 
 #include <Eigen/Core>
 
-#include "unjam/ensemble/equilibrium_matrix.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
 
 class ClpSimplex;
 

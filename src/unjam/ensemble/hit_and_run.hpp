@@ -23,7 +23,7 @@
 
 #include <Eigen/Core>
 
-#include "unjam/ensemble/equilibrium_matrix.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 
 namespace unjam {

@@ -22,7 +22,7 @@ struct CompactionSettings {
   StaticSolveSettings final_solve;
   double v_static = 1e-3;      // mean speed of force-carrying grains (R_max / t0) to try
   double p_static = 1e-2;      // ... and |P_in / P_ext - 1| below this
-  double attempt_budget = 3.0;   // sweeps of one attempt, in units of (L / d)^2 (at least 2000)
+  double attempt_budget = 0.5;   // sweeps of one attempt, in units of (L / d)^2 (at least 2000)
   std::int64_t max_steps = 10'000'000;
 };
 

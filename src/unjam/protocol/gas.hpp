@@ -17,7 +17,7 @@ struct GasSettings {
 };
 
 // Throws unjam::Error for invalid settings (N < 2, radii not 0 < R_min <= R_max,
-// phi outside (0, 0.5]).
+// phi outside (0, 0.45]).
 Packing make_gas(const GasSettings& settings);
 
 }  // namespace unjam

@@ -4,9 +4,8 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/SparseCholesky>
-
-#include "unjam/ensemble/equilibrium_matrix.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/least_norm.hpp"
 
 namespace unjam {
 namespace {
@@ -87,13 +86,10 @@ PolishResult polish_forces(Packing& packing, double tol, double touch_gap) {
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(rows);
     rhs[row_map[sys.pressure_row()]] = sys.rhs[sys.pressure_row()];
 
-    // Least-norm correction, regularised by eps I against floppy modes, refined twice.
-    Eigen::SparseMatrix<double> M = B * B.transpose();
-    const double eps = 1e-14 * M.diagonal().mean();
-    for (int i = 0; i < rows; ++i) M.coeffRef(i, i) += eps;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(M);
-    if (ldlt.info() != Eigen::Success) return res;
-    for (int refine = 0; refine < 3; ++refine) x -= B.transpose() * ldlt.solve(B * x - rhs);
+    // The smallest correction that restores balance.
+    const auto dx = least_norm_solution(B, Eigen::VectorXd::Ones(B.cols()), rhs - B * x);
+    if (!dx) return res;
+    x += *dx;
 
     // Back to (fn, ft) and the active-set checks.
     f.setZero();

@@ -1,4 +1,4 @@
-#include "unjam/ensemble/equilibrium_matrix.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
 
 #include <algorithm>
 #include <string>

@@ -1,0 +1,53 @@
+#pragma once
+// The fast probe (PHYSICS.md sections 6 and 7). In the small-g, negligible-inertia limit the
+// forces at the end of the probe are statically admissible, so the critical force is the
+// largest admissible normal force of the contact:
+//     F_crit(c) = max fn_c over { A f = rhs, fn >= 0, |ft| <= mu fn }    (a linear program).
+// At that optimum the contacts that are open (fn = 0) and sliding (|ft| = mu fn) are known;
+// every other contact keeps its surfaces together. The displacement field is then the
+// kinematic problem of the step with that active set: the displacement q of least kinetic
+// energy (as the contact-dynamics step selects it) such that
+//     sticking contacts:  U_n = 0, U_t = 0;    sliding contacts:  U_n = 0 (slip free);
+//     open contacts:      free;                the probed contact: U_n = g (its tangential
+//                                              condition as its state at the optimum),
+// with U = A^T q the relative displacements (A the balance rows: virtual work) and the
+// generalised coordinates q = (u_x, u_y, R theta per grain; lambda dt of the cell), of masses
+// (m, m, I/R^2; 2 V M_lambda). The LP is solved by barrier, whose optimum lies inside the
+// optimal face: a contact that carries force in some optimal network is constrained
+// (strict complementarity). The field's unilateral conditions (open contacts do not close,
+// sliding contacts slip against their friction force) are checked, not imposed.
+#include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/packing/packing.hpp"
+#include "unjam/probe/probe_result.hpp"
+
+namespace unjam {
+
+struct KinematicProbeSettings {
+  double g = 1e-9;            // prescribed opening (R_max)
+  double touch_gap = 1e-6;    // pairs closer than this enter the admissible set
+  double state_tol = 1e-7;    // (units of F0) open: fn <= tol; sliding: mu fn - |ft| <= tol
+  double M_lambda = 100.0;    // bath mass: weight of the cell strain in the kinetic energy
+  LpMethod method = LpMethod::barrier;
+};
+
+// Holds the admissible set of one packing and its LP; probes one contact after another.
+// Not thread-safe: give each thread its own copy.
+class KinematicProbe {
+ public:
+  KinematicProbe(const Packing& packing, const KinematicProbeSettings& settings);
+  // Probes packing.contacts[contact]; throws unjam::Error if it is not in the admissible
+  // set (not touching and carrying no force).
+  ProbeResult probe(int contact);
+  const EquilibriumSystem& system() const { return system_; }
+
+ private:
+  const Packing* packing_;
+  KinematicProbeSettings settings_;
+  EquilibriumSystem system_;
+  ForceLP lp_;
+  std::vector<int> system_index_;  // packing contact -> position in system_.contacts, or -1
+  Eigen::VectorXd inverse_mass_;   // per row of A (generalised coordinate)
+};
+
+}  // namespace unjam

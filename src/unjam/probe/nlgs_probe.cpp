@@ -1,0 +1,66 @@
+#include "unjam/probe/nlgs_probe.hpp"
+
+#include <algorithm>
+
+#include "unjam/core/error.hpp"
+#include "unjam/solver/nlgs.hpp"
+
+namespace unjam {
+
+ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& set) {
+  if (contact < 0 || contact >= static_cast<int>(packing.contacts.size()))
+    throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
+                std::to_string(packing.contacts.size()) + ")");
+  Contacts contacts = packing.contacts;
+  Particles particles = packing.particles;
+  std::fill(particles.vx.begin(), particles.vx.end(), 0.0);
+  std::fill(particles.vy.begin(), particles.vy.end(), 0.0);
+  std::fill(particles.omega.begin(), particles.omega.end(), 0.0);
+
+  StepProblem pb{packing.cell, set.dt, packing.meta.mu, set.bath, 0.0, {}};
+  pb.bath.P_ext = packing.meta.P_ext;
+  pb.g_eff.resize(contacts.size());
+  for (std::size_t k = 0; k < contacts.size(); ++k)
+    pb.g_eff[k] = contacts[k].gap < set.touch_gap ? 0.0 : contacts[k].gap;
+  pb.g_eff[contact] = -set.g;
+
+  NlgsSettings nlgs;
+  nlgs.rule = Convergence::kVelocityChange;
+  nlgs.velocity_tol = set.velocity_tol * set.g / set.dt;
+  nlgs.min_sweeps = set.min_sweeps;
+  nlgs.seed = set.seed;
+
+  ProbeResult r;
+  r.contact = contact;
+  r.a = contacts[contact].a;
+  r.b = contacts[contact].b;
+  r.f_cont = contacts[contact].fn;
+  r.g = set.g;
+  // NLGS sweeps are counted in int: run in chunks, each warm-started from the last, with
+  // the velocities reset to the free velocities (zero) before every chunk.
+  constexpr int kChunk = 1'000'000;
+  NlgsResult res;
+  while (r.sweeps < set.max_sweeps) {
+    std::fill(particles.vx.begin(), particles.vx.end(), 0.0);
+    std::fill(particles.vy.begin(), particles.vy.end(), 0.0);
+    std::fill(particles.omega.begin(), particles.omega.end(), 0.0);
+    nlgs.max_sweeps = static_cast<int>(std::min<long long>(kChunk, set.max_sweeps - r.sweeps));
+    nlgs.seed = set.seed + static_cast<std::uint64_t>(r.sweeps);
+    res = solve_nlgs(pb, nlgs, contacts, particles);
+    r.sweeps += res.sweeps;
+    if (res.converged) break;
+  }
+  r.converged = res.converged;
+  r.residual = res.max_dU / (set.g / set.dt);
+  r.f_crit = contacts[contact].fn;
+  r.lambda_dt = res.lambda * set.dt;
+  r.u.resize(particles.size());
+  r.u_rot.resize(particles.size());
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    r.u[i] = set.dt * particles.velocity(i);
+    r.u_rot[i] = set.dt * particles.omega[i];
+  }
+  return r;
+}
+
+}  // namespace unjam

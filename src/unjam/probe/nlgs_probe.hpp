@@ -1,0 +1,33 @@
+#pragma once
+// The paper's probe by plain contact dynamics (PHYSICS.md section 6): one time step from
+// the static packing (velocities zero, forces R0 as warm start, pressure bath on) in which
+// the probed contact's Signorini condition is shifted by g: its surfaces must separate by g
+// during the step (g_eff = -g; friction as usual). Every other touching pair keeps
+// g_eff = 0 (gap below touch_gap: the packing's own contact tolerance), the rest their gap.
+// F_crit is the probed contact's normal force once the step has converged; convergence is
+// judged on the largest change of a contact's relative velocity in a sweep against g / dt,
+// since forces change by only ~1e-9 relative at first. This is the reference method: its
+// cost grows like (L/d)^2 sweeps and more, see kinematic_probe.hpp for the fast route.
+#include <cstdint>
+
+#include "unjam/packing/packing.hpp"
+#include "unjam/probe/probe_result.hpp"
+#include "unjam/solver/step_problem.hpp"
+
+namespace unjam {
+
+struct ProbeSettings {
+  double g = 1e-9;             // prescribed opening (R_max)
+  double dt = 1e-3;            // probe time step (t0): inertia ~ m g / dt^2 is its error
+  double velocity_tol = 1e-6;  // converged when max |dU| in a sweep < velocity_tol g / dt
+  long long max_sweeps = 10'000'000;
+  int min_sweeps = 100;
+  double touch_gap = 1e-6;     // pairs closer than this touch (as in the static solve)
+  Bath bath;                   // the pressure bath stays on during the probe
+  std::uint64_t seed = 0;
+};
+
+// Probes contact `contact` of a static packing (not modified).
+ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& settings);
+
+}  // namespace unjam

@@ -1,0 +1,24 @@
+#pragma once
+// What a local perturbation probe measures (PHYSICS.md section 6).
+#include <vector>
+
+#include "unjam/core/vec2.hpp"
+
+namespace unjam {
+
+struct ProbeResult {
+  int contact = -1;            // index into packing.contacts
+  int a = -1, b = -1;          // its grains
+  double f_cont = 0.0;         // normal force of the static packing (simulation units)
+  double f_crit = 0.0;         // normal force needed to open the contact by g
+  double g = 0.0;              // the prescribed opening
+  double lambda_dt = 0.0;      // affine strain of the cell during the probe, lambda dt
+  std::vector<Vec2> u;         // peculiar displacement of every grain (length units)
+  std::vector<double> u_rot;   // rotation of every grain (radians)
+  bool converged = false;
+  long long sweeps = 0;        // NLGS sweeps (0 for the kinematic probe)
+  double residual = 0.0;       // method's own convergence measure (see the method)
+  int violations = 0;          // kinematic probe: unilateral conditions its field breaks
+};
+
+}  // namespace unjam
