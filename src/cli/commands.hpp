@@ -7,6 +7,7 @@ namespace unjam::cli {
 
 void add_pack_command(CLI::App& app);
 void add_info_command(CLI::App& app);
+void add_probe_command(CLI::App& app);
 void add_bounds_command(CLI::App& app);
 void add_ensemble_command(CLI::App& app);
 

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   unjam::cli::set_command_line(argc, argv);
   unjam::cli::add_pack_command(app);
   unjam::cli::add_info_command(app);
+  unjam::cli::add_probe_command(app);
   unjam::cli::add_bounds_command(app);
   unjam::cli::add_ensemble_command(app);
   try {

@@ -17,8 +17,10 @@ struct ProbeResult {
   std::vector<double> u_rot;   // rotation of every grain (radians)
   bool converged = false;
   long long sweeps = 0;        // NLGS sweeps (0 for the kinematic probe)
-  double residual = 0.0;       // method's own convergence measure (see the method)
-  int violations = 0;          // kinematic probe: unilateral conditions its field breaks
+  // nlgs: largest relative-velocity change of the last sweep / (g / dt);
+  // lp: largest violation of the field's equality constraints / g (0: exactly compatible).
+  double residual = 0.0;
+  int violations = 0;          // lp: unilateral conditions its field still breaks
 };
 
 }  // namespace unjam

@@ -1,0 +1,251 @@
+// `unjam probe DIR`: the local perturbation probe (PHYSICS.md section 6). One contact
+// (--contact K: F_crit and the displacement of every grain) or every force-carrying contact
+// (--all, or --sample K of them), each from the same static packing, with the averages of
+// the paper's Figs. 1 and 2 and the decay exponent alpha.
+#include <omp.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "cli/commands.hpp"
+#include "cli/run_info.hpp"
+#include "unjam/analysis/packing_stats.hpp"
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/core/version.hpp"
+#include "unjam/packing/csv_table.hpp"
+#include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/probe_campaign.hpp"
+#include "unjam/protocol/compaction.hpp"
+#include "unjam/protocol/gas.hpp"
+#include "unjam/protocol/settings_json.hpp"
+
+namespace unjam::cli {
+namespace {
+
+namespace fs = std::filesystem;
+std::atomic<int> g_signal{0};
+extern "C" void on_probe_signal(int sig) { g_signal = sig; }
+
+struct ProbeOptions {
+  std::string dir, out, method = "lp", displacement = "peculiar";
+  int contact = -1;
+  bool all = false;
+  int sample = 0;
+  std::uint64_t seed = 1;
+  double g = 1e-9, dt = 1e-3, velocity_tol = 1e-6;
+  long long max_sweeps = 10'000'000;
+  int threads = 0;
+  double checkpoint_s = 30.0;
+  bool quiet = false;
+};
+
+// The probe settings follow the packing: its contact tolerance and bath mass.
+CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
+  CompactionSettings cs;
+  GasSettings gas;
+  from_json(p.meta.settings, cs, gas);
+  CampaignSettings s;
+  if (o.method != "lp" && o.method != "nlgs") throw Error("--method must be lp or nlgs");
+  if (o.displacement != "peculiar" && o.displacement != "total")
+    throw Error("--displacement must be peculiar or total");
+  if (!(o.g > 0.0) || !(o.dt > 0.0) || !(o.velocity_tol > 0.0))
+    throw Error("--g, --dt and --velocity-tol must be positive");
+  s.method = o.method == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
+  s.total_displacement = o.displacement == "total";
+  s.sample = o.sample;
+  s.seed = o.seed;
+  s.nlgs.g = s.kinematic.g = o.g;
+  s.nlgs.dt = o.dt;
+  s.nlgs.velocity_tol = o.velocity_tol;
+  s.nlgs.max_sweeps = o.max_sweeps;
+  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
+  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  return s;
+}
+
+void write_single(const fs::path& out, const Packing& p, const ProbeResult& r) {
+  CsvWriter w({"id", "x", "y", "radius", "ux", "uy", "rot", "ux_g", "uy_g"});
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    w.cell(static_cast<std::int64_t>(i)).cell(p.particles.x[i]).cell(p.particles.y[i]);
+    w.cell(p.particles.radius[i]).cell(r.u[i].x()).cell(r.u[i].y()).cell(r.u_rot[i]);
+    w.cell(r.u[i].x() / r.g).cell(r.u[i].y() / r.g);
+    w.end_row();
+  }
+  write_file_atomic(out / ("probe-" + std::to_string(r.contact) + ".csv"), w.str());
+}
+
+std::string rows_csv(const CampaignState& state, const std::string& method) {
+  CsvWriter w({"contact", "a", "b", "f_cont", "f_crit", "method", "converged", "sweeps",
+               "residual", "violations", "lambda_dt"});
+  for (const ProbeRow& r : state.rows) {
+    w.cell(r.contact).cell(r.a).cell(r.b).cell(r.f_cont).cell(r.f_crit).cell(method);
+    w.cell(r.converged ? 1 : 0).cell(static_cast<std::int64_t>(r.sweeps)).cell(r.residual);
+    w.cell(r.violations).cell(r.lambda_dt);
+    w.end_row();
+  }
+  return w.str();
+}
+
+void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const ProbeResult r = probe_contact(p, s, o.contact);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_single(out, p, r);
+  const double F0 = p.force_unit();
+  std::printf("contact %d (grains %d-%d), method %s\n", r.contact, r.a, r.b, o.method.c_str());
+  std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
+              r.f_crit / F0, r.f_crit / r.f_cont);
+  std::printf("  converged %s  sweeps %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
+              r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
+  std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
+              (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
+}
+
+void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
+  const fs::path checkpoint = out / "probe_checkpoint.json";
+  const nlohmann::json settings_json = to_json(s);
+  CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  if (fs::exists(checkpoint)) {
+    const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
+    if (j.is_discarded()) throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
+    if (j.value("settings", nlohmann::json{}) != settings_json)
+      throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
+    state = campaign_state_from_json(j.at("state"));
+    std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
+  }
+  const int total = static_cast<int>(campaign_targets(p, s).size());
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads\n", total,
+               o.dir.c_str(), o.method.c_str(), omp_get_max_threads());
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto last_report = t0, last_checkpoint = t0;
+  const std::size_t done_before = state.rows.size();
+  CampaignHooks hooks;
+  hooks.progress = [&](int done, int all) {
+    const auto now = std::chrono::steady_clock::now();
+    if (o.quiet || (std::chrono::duration<double>(now - last_report).count() < 2.0 && done < all)) return;
+    last_report = now;
+    const double el = std::chrono::duration<double>(now - t0).count();
+    const double rate = (done - static_cast<double>(done_before)) / std::max(el, 1e-9);
+    std::fprintf(stderr, "probes %d / %d (%.1f %%)  elapsed %s  ETA ~%s\n", done, all,
+                 100.0 * done / std::max(all, 1), format_duration(el).c_str(),
+                 format_duration(rate > 0 ? (all - done) / rate : -1).c_str());
+  };
+  hooks.checkpoint = [&](const CampaignState& st) {
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_checkpoint).count() < o.checkpoint_s && g_signal == 0) return;
+    last_checkpoint = now;
+    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(st)}}.dump());
+  };
+  hooks.should_stop = [] { return g_signal != 0; };
+  std::signal(SIGINT, on_probe_signal);
+  std::signal(SIGTERM, on_probe_signal);
+  const bool finished = run_campaign(p, s, state, hooks);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!finished) {
+    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(state)}}.dump());
+    throw Error("interrupted after " + std::to_string(state.rows.size()) +
+                " probes; run the same command again to resume");
+  }
+
+  const CampaignSummary sum = summarize(p, state);
+  const PackingStats stats = compute_packing_stats(p);
+  write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
+  write_file_atomic(out / "response_field.csv", state.average.field_csv());
+  write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
+  nlohmann::json summary = {
+      {"program_version", kVersion},
+      {"command", command_line()},
+      {"packing", o.dir},
+      {"seed", p.meta.seed},
+      {"N", p.size()},
+      {"mu", p.meta.mu},
+      {"phi", stats.phi},
+      {"z", stats.z},
+      {"F0", p.force_unit()},
+      {"probes", sum.probes},
+      {"not_converged", sum.not_converged},
+      {"F_cont_over_F0", sum.F_cont_over_F0},
+      {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
+      {"settings", settings_json},
+      {"method", o.method},
+      {"g", s.kinematic.g},
+      {"wall_seconds", wall},
+  };
+  if (sum.has_fit) {
+    summary["alpha"] = sum.fit.alpha;
+    summary["alpha_err"] = sum.fit.alpha_err;
+    summary["fit"] = {{"r_lo", sum.fit.r_lo}, {"r_hi", sum.fit.r_hi}, {"bins", sum.fit.bins},
+                      {"R2", sum.fit.R2}, {"log_A", sum.fit.log_A},
+                      {"bootstrap_samples", sum.fit.bootstrap_samples}};
+  } else {
+    summary["fit_error"] = sum.fit_error;
+  }
+  write_file_atomic(out / "probe_summary.json", summary.dump(2));
+  fs::remove(checkpoint);
+
+  std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),
+              o.method.c_str(), format_duration(wall).c_str(), out.c_str());
+  std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.mu, stats.phi,
+              stats.z, sum.F_cont_over_F0);
+  std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d\n", sum.F_crit_over_F_cont, sum.not_converged);
+  if (sum.has_fit)
+    std::printf("  d(r) ~ r^-alpha: alpha = %.3f +- %.3f  (fit over r in [%.2f, %.2f], %d bins, R2 %.3f)\n",
+                sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);
+  else
+    std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
+}
+
+void run(const ProbeOptions& o) {
+  const int modes = (o.contact >= 0) + o.all + (o.sample > 0);
+  if (modes != 1) throw Error("give exactly one of --contact K, --all, --sample K");
+  const Packing p = read_packing(o.dir);
+  if (!p.state.is_static)
+    std::fprintf(stderr, "warning: %s is not marked static (its compaction did not finish)\n", o.dir.c_str());
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const CampaignSettings s = campaign_settings(o, p);
+  const fs::path out = o.out.empty() ? fs::path(o.dir) : fs::path(o.out);
+  if (o.contact >= 0) {
+    if (o.contact >= static_cast<int>(p.contacts.size()))
+      throw Error("--contact " + std::to_string(o.contact) + ": the packing has " +
+                  std::to_string(p.contacts.size()) + " contacts");
+    run_single(o, p, s, out);
+  } else {
+    run_all(o, p, s, out);
+  }
+}
+
+}  // namespace
+
+void add_probe_command(CLI::App& app) {
+  auto o = std::make_shared<ProbeOptions>();
+  CLI::App* cmd = app.add_subcommand("probe", "open contacts by a tiny gap: critical force and displacement field");
+  cmd->add_option("dir", o->dir, "static packing directory")->required();
+  cmd->add_option("--contact", o->contact, "probe this contact (row of contacts.csv, from 0)");
+  cmd->add_flag("--all", o->all, "probe every force-carrying contact");
+  cmd->add_option("--sample", o->sample, "probe a seeded random subset of this many force-carrying contacts");
+  cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str();
+  cmd->add_option("--method", o->method,
+                  "lp: F_crit as the LP maximum and the kinematic field at its optimum (fast); "
+                  "nlgs: the paper's contact-dynamics probe (reference, slow)")->capture_default_str();
+  cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
+  cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str();
+  cmd->add_option("--dt", o->dt, "nlgs: time step of the probe")->capture_default_str();
+  cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")->capture_default_str();
+  cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str();
+  cmd->add_option("--displacement", o->displacement,
+                  "displacement in the averages: peculiar, or total (with the affine part of the cell)")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
+  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")->capture_default_str();
+  cmd->add_flag("--quiet", o->quiet, "no progress lines");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace unjam::cli

@@ -1,0 +1,86 @@
+#include "unjam/ensemble/random_walk.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <random>
+
+#include "unjam/core/error.hpp"
+#include "unjam/solver/static_solve.hpp"
+
+namespace unjam {
+
+RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSystem& system,
+                                    const RandomWalkOptions& options) {
+  if (options.samples < 1) throw Error("random walk: samples must be at least 1");
+  if (!(options.kick >= 0.0)) throw Error("random walk: the kick amplitude must be >= 0");
+  const int Nc = system.num_contacts();
+
+  // The copy the solver relaxes: the same grains and cell, only the contacts of the set, in
+  // the order of system.contacts (solve_static keeps the order). Every contact of the set
+  // touches: touch_gap lies above the largest gap among them.
+  Packing work = packing;
+  work.contacts.clear();
+  double max_gap = 0.0;
+  for (const int c : system.contacts) {
+    work.contacts.push_back(packing.contacts[c]);
+    max_gap = std::max(max_gap, packing.contacts[c].gap);
+  }
+  StaticSolveSettings solve;
+  solve.tol = options.tol;
+  solve.max_sweeps = options.max_sweeps;
+  solve.touch_gap = std::max(solve.touch_gap, 2.0 * max_gap);
+  Bath bath;
+  bath.P_ext = packing.meta.P_ext;
+
+  RandomWalkResult result;
+  double mean_fn0 = 0.0;  // <F_n> of the packing's network over the set
+  for (const Contact& c : work.contacts) mean_fn0 += c.fn;
+  mean_fn0 = Nc > 0 ? mean_fn0 / Nc : 0.0;
+  result.kick_amplitude = options.kick * mean_fn0;
+
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> kick(-result.kick_amplitude, result.kick_amplitude);
+  ForceNetwork state{Eigen::VectorXd(Nc), Eigen::VectorXd(Nc)};
+  for (int k = 0; k < Nc; ++k) {
+    state.fn[k] = work.contacts[k].fn;
+    state.ft[k] = work.contacts[k].ft;
+  }
+
+  // Welford running mean and variance of fn per contact.
+  result.sample_min = Eigen::VectorXd::Constant(Nc, std::numeric_limits<double>::infinity());
+  result.sample_max = Eigen::VectorXd::Constant(Nc, -std::numeric_limits<double>::infinity());
+  result.mean = Eigen::VectorXd::Zero(Nc);
+  Eigen::VectorXd m2 = Eigen::VectorXd::Zero(Nc);
+  for (int step = 0; step < options.samples; ++step) {
+    for (int k = 0; k < Nc; ++k) {
+      work.contacts[k].fn = state.fn[k] + kick(rng);
+      work.contacts[k].ft = state.ft[k] + kick(rng);
+    }
+    solve.seed = rng();
+    const StaticSolveReport rep = solve_static(work, bath, solve);
+    result.sweeps += rep.sweeps;
+    if (rep.converged) {
+      for (int k = 0; k < Nc; ++k) {
+        state.fn[k] = work.contacts[k].fn;
+        state.ft[k] = work.contacts[k].ft;
+      }
+      const double n = ++result.samples;
+      result.sample_min = result.sample_min.cwiseMin(state.fn);
+      result.sample_max = result.sample_max.cwiseMax(state.fn);
+      const Eigen::VectorXd delta = state.fn - result.mean;
+      result.mean += delta / n;
+      m2 += delta.cwiseProduct(state.fn - result.mean);
+      if (options.on_sample) options.on_sample(state);
+    } else {
+      ++result.failures;
+    }
+    if (options.progress) options.progress(step + 1, options.samples);
+  }
+  result.std = result.samples > 1 ? (m2 / (result.samples - 1.0)).cwiseSqrt().eval()
+                                  : Eigen::VectorXd::Zero(Nc).eval();
+  result.mean_fn = Nc > 0 ? result.mean.mean() : 0.0;
+  result.eta = result.mean_fn > 0.0 ? result.std.mean() / result.mean_fn : 0.0;
+  return result;
+}
+
+}  // namespace unjam

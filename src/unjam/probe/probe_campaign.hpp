@@ -1,0 +1,90 @@
+#pragma once
+// Probing every contact of a packing, one by one, always from the same static packing
+// (PHYSICS.md sections 6 and 8): the probes run in parallel (one probe per thread at a time),
+// the per-grain displacement fields go straight into the averages (mean field in the
+// contact frame and d(r)), and only one row per probe is kept. A campaign can stop and
+// resume: its state (rows and averages) is saved as JSON and finished probes are skipped.
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "unjam/analysis/power_law_fit.hpp"
+#include "unjam/analysis/response_average.hpp"
+#include "unjam/packing/packing.hpp"
+#include "unjam/probe/kinematic_probe.hpp"
+#include "unjam/probe/nlgs_probe.hpp"
+
+namespace unjam {
+
+enum class ProbeMethod {
+  kLp,    // F_crit = LP maximum, field = kinematic problem at the optimum (fast)
+  kNlgs,  // the paper's contact-dynamics probe (reference, slow)
+};
+
+struct CampaignSettings {
+  ProbeMethod method = ProbeMethod::kLp;
+  ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS probe
+  KinematicProbeSettings kinematic;     // g, LP and state tolerances of the fast probe
+  bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
+  double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
+  int sample = 0;                       // > 0: a random subset of this many contacts
+  std::uint64_t seed = 1;               // of the subset
+};
+
+// One probed contact (forces in simulation units, as contacts.csv).
+struct ProbeRow {
+  int contact = -1, a = -1, b = -1;
+  double f_cont = 0.0, f_crit = 0.0;
+  bool converged = false;
+  long long sweeps = 0;
+  double residual = 0.0;
+  int violations = 0;
+  double lambda_dt = 0.0;
+};
+
+struct CampaignState {
+  std::vector<ProbeRow> rows;  // sorted by contact
+  ResponseAverage average;
+  explicit CampaignState(const ResponseGrid& grid) : average(grid) {}
+};
+
+struct CampaignHooks {
+  std::function<void(int done, int total)> progress;  // after every batch
+  std::function<void(const CampaignState&)> checkpoint;  // after every batch
+  std::function<bool()> should_stop;
+};
+
+struct CampaignSummary {
+  int probes = 0;
+  int not_converged = 0;
+  double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probed contacts
+  double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
+  bool has_fit = false;
+  PowerLawFit fit;
+  std::string fit_error;             // why there is no fit (e.g. cell too small)
+};
+
+// The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
+std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
+
+// Probes every target not yet in `state`; returns false if should_stop ended it early.
+bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
+                  const CampaignHooks& hooks = {});
+
+// Probes one contact with the campaign's method.
+ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
+
+// Adds one probe's field (non-rattler grains, displacement / g in the contact frame).
+void add_to_average(const Packing& packing, const CampaignSettings& settings,
+                    const ProbeResult& result, ResponseAverage& average);
+
+CampaignSummary summarize(const Packing& packing, const CampaignState& state,
+                          int bootstrap_samples = 200, std::uint64_t seed = 1);
+
+nlohmann::json to_json(const CampaignSettings& settings);
+nlohmann::json to_json(const CampaignState& state);
+CampaignState campaign_state_from_json(const nlohmann::json& j);
+
+}  // namespace unjam
