@@ -260,6 +260,7 @@ Packing run_dense(int threads, int steps, int max_sweeps, std::vector<int>* bloc
   DynamicsSettings ds;
   ds.nlgs.seed = 3;
   ds.nlgs.max_sweeps = max_sweeps;
+  ds.nlgs.threading = Threading::kParallel;  // with 2 threads: the parallel path, always
   for (int s = 0; s < steps; ++s) {
     if (blocks_per_color && s == steps - 1) {
       // The solver's colouring of the last step (advance() mixes the seed with the step).

@@ -3,6 +3,8 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -126,6 +128,34 @@ struct Sweeper {
   }
 };
 
+
+// Measured cost of a contact update in each mode (ns), shared by all solves of the process;
+// exponential moving averages, 0 while unknown.
+std::atomic<double> g_ns_serial{0.0}, g_ns_parallel{0.0};
+std::atomic<int> g_choices{0};
+
+void record_speed(bool parallel, double ns) {
+  auto& avg = parallel ? g_ns_parallel : g_ns_serial;
+  const double old = avg.load();
+  avg.store(old == 0.0 ? ns : 0.7 * old + 0.3 * ns);
+}
+
+// Parallel when it has been measured faster; each mode is measured first, and the slower
+// one is tried again every 32nd choice, since the load of the machine changes.
+bool choose_parallel() {
+  const double par = g_ns_parallel.load(), ser = g_ns_serial.load();
+  if (par == 0.0) return true;
+  if (ser == 0.0) return false;
+  const bool faster = par < ser;
+  return (++g_choices % 32 == 0) ? !faster : faster;
+}
+
+// Within a solve: parallel sweeps clearly slower than serial ones measured before.
+bool parallel_is_slow() {
+  const double ser = g_ns_serial.load();
+  return ser > 0.0 && g_ns_parallel.load() > 1.5 * ser;
+}
+
 }  // namespace
 
 NlgsResult solve_nlgs(const StepProblem& pb, const NlgsSettings& set, Contacts& contacts,
@@ -201,68 +231,84 @@ NlgsResult solve_nlgs(const StepProblem& pb, const NlgsSettings& set, Contacts& 
                                        [](double acc, const Row& r) { return acc + r.Rn; });
   bool done = nc == 0;
   int sweep = 0;
-  // Parallel only when there is more than one block per colour on average.
-  const bool parallel = omp_get_max_threads() > 1 && num_blocks > 2 * num_colors;
-
+  // Serial and parallel sweeps give bit-identical results, so the mode is free: the faster
+  // one measured so far, with a fall-back to serial inside a solve when parallel sweeps turn
+  // slow (two barriers per colour stall when another process holds a core).
+  const bool eligible = omp_get_max_threads() > 1 && !omp_in_parallel() &&
+                        num_blocks > 2 * num_colors && set.threading != Threading::kSerial;
+  const bool adaptive = set.threading == Threading::kAuto;
+  bool parallel = eligible && (!adaptive || choose_parallel());
+  const double updates_per_sweep = static_cast<double>(nc);
+  constexpr int kChunk = 16;  // sweeps between two looks at the clock
+  while (!done) {
+    const int chunk_end = sweep + kChunk, chunk_start = sweep;
+    const auto t0 = std::chrono::steady_clock::now();
 #pragma omp parallel if (parallel) default(shared)
-  {
-    while (!done) {
+    {
+      while (!done && sweep < chunk_end) {
 #pragma omp single
-      std::shuffle(color_order.begin(), color_order.end(), rng);
-      for (int ci = 0; ci < num_colors; ++ci) {
-        const int color = color_order[ci];
+        std::shuffle(color_order.begin(), color_order.end(), rng);
+        for (int ci = 0; ci < num_colors; ++ci) {
+          const int color = color_order[ci];
 #pragma omp for schedule(static)
-        for (int blk = color_first_block[color]; blk < color_first_block[color + 1]; ++blk) {
-          Tally t;
-          for (int q = block_start[blk], e = block_end(blk, color); q < e; ++q)
-            s.update(s.row[q], t, set.tol);
-          tally[blk] = t;
+          for (int blk = color_first_block[color]; blk < color_first_block[color + 1]; ++blk) {
+            Tally t;
+            for (int q = block_start[blk], e = block_end(blk, color); q < e; ++q)
+              s.update(s.row[q], t, set.tol);
+            tally[blk] = t;
+          }
+#pragma omp single
+          {
+            for (int blk = color_first_block[color]; blk < color_first_block[color + 1]; ++blk) {
+              s.S += tally[blk].dS;
+              s.K += tally[blk].dK;
+            }
+            s.update_lambda();
+          }
         }
 #pragma omp single
         {
-          for (int blk = color_first_block[color]; blk < color_first_block[color + 1]; ++blk) {
-            s.S += tally[blk].dS;
-            s.K += tally[blk].dK;
+          ++sweep;
+          Tally all;
+          for (const Tally& t : tally) {
+            all.max_dU = std::max(all.max_dU, t.max_dU);
+            all.sum_absR += t.sum_absR;
+            all.sum_Rn += t.sum_Rn;
+            all.rel_ok += t.rel_ok;
+            all.abs_fail += t.abs_fail;
           }
-          s.update_lambda();
-        }
-      }
-#pragma omp single
-      {
-        ++sweep;
-        Tally all;
-        for (const Tally& t : tally) {
-          all.max_dU = std::max(all.max_dU, t.max_dU);
-          all.sum_absR += t.sum_absR;
-          all.sum_Rn += t.sum_Rn;
-          all.rel_ok += t.rel_ok;
-          all.abs_fail += t.abs_fail;
-        }
-        s.R_avg = all.sum_absR / nc;
-        res.max_dU = all.max_dU;
-        bool ok = false;
-        switch (set.rule) {
-          case Convergence::kForceChange: {
-            const double dm = all.sum_Rn - prev_sum_Rn;
-            ok = all.rel_ok >= 0.9 * nc && all.abs_fail == 0 &&
-                 dm * dm <= set.tol * all.sum_Rn * all.sum_Rn;
-            break;
-          }
-          case Convergence::kVelocityChange:
-            ok = all.max_dU < set.velocity_tol;
-            break;
-          case Convergence::kStatic:
-            if (sweep % set.check_every == 0 || sweep >= set.max_sweeps) {
-              res.max_residual_F0 = s.max_residual() / set.F0;
-              ok = res.max_residual_F0 < set.static_tol &&
-                   std::abs(s.pressure() / pb.bath.P_ext - 1.0) < set.static_tol;
+          s.R_avg = all.sum_absR / nc;
+          res.max_dU = all.max_dU;
+          bool ok = false;
+          switch (set.rule) {
+            case Convergence::kForceChange: {
+              const double dm = all.sum_Rn - prev_sum_Rn;
+              ok = all.rel_ok >= 0.9 * nc && all.abs_fail == 0 &&
+                   dm * dm <= set.tol * all.sum_Rn * all.sum_Rn;
+              break;
             }
-            break;
+            case Convergence::kVelocityChange:
+              ok = all.max_dU < set.velocity_tol;
+              break;
+            case Convergence::kStatic:
+              if (sweep % set.check_every == 0 || sweep >= set.max_sweeps) {
+                res.max_residual_F0 = s.max_residual() / set.F0;
+                ok = res.max_residual_F0 < set.static_tol &&
+                     std::abs(s.pressure() / pb.bath.P_ext - 1.0) < set.static_tol;
+              }
+              break;
+          }
+          prev_sum_Rn = all.sum_Rn;
+          res.converged = ok && sweep >= set.min_sweeps;
+          done = res.converged || sweep >= set.max_sweeps;
         }
-        prev_sum_Rn = all.sum_Rn;
-        res.converged = ok && sweep >= set.min_sweeps;
-        done = res.converged || sweep >= set.max_sweeps;
       }
+    }
+    if (eligible) {
+      const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() /
+                        (updates_per_sweep * std::max(1, sweep - chunk_start));
+      record_speed(parallel, ns);
+      if (adaptive && parallel && parallel_is_slow()) parallel = false;
     }
   }
 

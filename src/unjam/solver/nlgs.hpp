@@ -28,6 +28,13 @@ enum class Convergence {
   kStatic,
 };
 
+// How a solve uses the threads. Serial and parallel sweeps give bit-identical results.
+enum class Threading {
+  kAuto,      // the faster mode as measured during the run (parallel only when it pays)
+  kParallel,  // always parallel when there are enough contacts
+  kSerial,
+};
+
 struct NlgsSettings {
   Convergence rule = Convergence::kForceChange;
   double tol = 1e-4;           // alpha of kForceChange
@@ -42,6 +49,7 @@ struct NlgsSettings {
   int max_sweeps = 200;
   int check_every = 20;        // sweeps between two kStatic residual evaluations
   std::uint64_t seed = 0;      // colouring and colour order
+  Threading threading = Threading::kAuto;
 };
 
 struct NlgsResult {
