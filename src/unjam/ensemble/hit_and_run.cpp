@@ -152,28 +152,17 @@ HitAndRunResult sample_hit_and_run(const EquilibriumSystem& system, const ForceB
   for (long long s = 0; s < burn_in; ++s) step();
 
   // Welford running mean and variance of fn per contact.
-  result.sample_min = Eigen::VectorXd::Constant(Nc, std::numeric_limits<double>::infinity());
-  result.sample_max = Eigen::VectorXd::Constant(Nc, -std::numeric_limits<double>::infinity());
-  result.mean = Eigen::VectorXd::Zero(Nc);
-  Eigen::VectorXd m2 = Eigen::VectorXd::Zero(Nc);
+  SampledForcesAccumulator stats(Nc);
   ForceNetwork net;
   for (int s = 0; s < options.samples; ++s) {
     for (int t = 0; t < thin; ++t) step();
     for (int j = 0; j < n; ++j) y_full[free_cols[j]] = y[j];
     cone_to_forces(system, y_full, net.fn, net.ft);
-    result.sample_min = result.sample_min.cwiseMin(net.fn);
-    result.sample_max = result.sample_max.cwiseMax(net.fn);
-    const Eigen::VectorXd delta = net.fn - result.mean;
-    result.mean += delta / (s + 1.0);
-    m2 += delta.cwiseProduct(net.fn - result.mean);
+    stats.add(net.fn);
     if (options.on_sample) options.on_sample(net);
   }
   result.samples = options.samples;
-  // Sample standard deviation (n - 1); zero for a single sample.
-  result.std = options.samples > 1 ? (m2 / (options.samples - 1.0)).cwiseSqrt().eval()
-                                   : Eigen::VectorXd::Zero(Nc).eval();
-  result.mean_fn = Nc > 0 ? result.mean.mean() : 0.0;
-  result.eta = result.mean_fn > 0.0 ? result.std.mean() / result.mean_fn : 0.0;
+  static_cast<SampledForces&>(result) = stats.result();
   return result;
 }
 

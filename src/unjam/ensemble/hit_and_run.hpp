@@ -23,6 +23,8 @@
 
 #include <Eigen/Core>
 
+#include "unjam/ensemble/sampled_forces.hpp"
+
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 
@@ -38,11 +40,7 @@ struct HitAndRunOptions {
   std::function<void(const ForceNetwork&)> on_sample;  // every sample, may be empty
 };
 
-struct HitAndRunResult {
-  Eigen::VectorXd sample_min, sample_max;  // per contact: extremes of fn over the samples
-  Eigen::VectorXd mean, std;               // per contact: mean and standard deviation of fn
-  double eta = 0.0;                        // <dF> / <|F|>
-  double mean_fn = 0.0;                    // <|F|>: fn over contacts and samples
+struct HitAndRunResult : SampledForces {
   int dimension = 0;                       // dimension of the sampled polytope
   int fixed_open = 0;                      // contacts open in every network (not walked)
   double start_depth = 0.0;                // s of the start: min cone coordinate (force units)

@@ -47,10 +47,7 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
   }
 
   // Welford running mean and variance of fn per contact.
-  result.sample_min = Eigen::VectorXd::Constant(Nc, std::numeric_limits<double>::infinity());
-  result.sample_max = Eigen::VectorXd::Constant(Nc, -std::numeric_limits<double>::infinity());
-  result.mean = Eigen::VectorXd::Zero(Nc);
-  Eigen::VectorXd m2 = Eigen::VectorXd::Zero(Nc);
+  SampledForcesAccumulator stats(Nc);
   for (int step = 0; step < options.samples; ++step) {
     for (int k = 0; k < Nc; ++k) {
       work.contacts[k].fn = state.fn[k] + kick(rng);
@@ -64,22 +61,15 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
         state.fn[k] = work.contacts[k].fn;
         state.ft[k] = work.contacts[k].ft;
       }
-      const double n = ++result.samples;
-      result.sample_min = result.sample_min.cwiseMin(state.fn);
-      result.sample_max = result.sample_max.cwiseMax(state.fn);
-      const Eigen::VectorXd delta = state.fn - result.mean;
-      result.mean += delta / n;
-      m2 += delta.cwiseProduct(state.fn - result.mean);
+      ++result.samples;
+      stats.add(state.fn);
       if (options.on_sample) options.on_sample(state);
     } else {
       ++result.failures;
     }
     if (options.progress) options.progress(step + 1, options.samples);
   }
-  result.std = result.samples > 1 ? (m2 / (result.samples - 1.0)).cwiseSqrt().eval()
-                                  : Eigen::VectorXd::Zero(Nc).eval();
-  result.mean_fn = Nc > 0 ? result.mean.mean() : 0.0;
-  result.eta = result.mean_fn > 0.0 ? result.std.mean() / result.mean_fn : 0.0;
+  static_cast<SampledForces&>(result) = stats.result();
   return result;
 }
 

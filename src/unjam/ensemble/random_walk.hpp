@@ -25,6 +25,8 @@
 
 #include <Eigen/Core>
 
+#include "unjam/ensemble/sampled_forces.hpp"
+
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/packing/packing.hpp"
@@ -42,11 +44,7 @@ struct RandomWalkOptions {
   std::function<void(int, int)> progress;              // (steps done, steps), may be empty
 };
 
-struct RandomWalkResult {
-  Eigen::VectorXd sample_min, sample_max;  // per contact: extremes of fn over the samples
-  Eigen::VectorXd mean, std;               // per contact: mean and standard deviation of fn
-  double eta = 0.0;                        // <dF> / <|F|>
-  double mean_fn = 0.0;                    // <|F|>: fn over contacts and samples
+struct RandomWalkResult : SampledForces {
   double kick_amplitude = 0.0;             // a = kick <F_n> (force units)
   int samples = 0;                         // converged relaxations
   int failures = 0;                        // relaxations that did not converge
