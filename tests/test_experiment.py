@@ -1,0 +1,122 @@
+"""Tests of scripts/experiment.py at --scale tiny (about 30 s).
+
+Run from the repository root:  /usr/bin/python3 -m unittest tests/test_experiment.py
+Skipped when build/release/unjam is missing.
+"""
+
+import csv
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+UNJAM = os.path.join(REPO, "build", "release", "unjam")
+SCRIPT = os.path.join(REPO, "scripts", "experiment.py")
+
+STAGE_LINE = re.compile(r"^\[(\d+)/(\d+)\] (.+?): .* \.\.\. (running|done in [\d.]+ s|"
+                        r"skipped \(cached\))  \[")
+
+
+def run(out, *extra):
+    p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out, *extra],
+                       capture_output=True, text=True, cwd=REPO, timeout=300)
+    if p.returncode != 0:
+        raise AssertionError(f"experiment.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
+    return p.stdout
+
+
+def outcomes(stdout):
+    """{stage name: 'ran' | 'cached'} from the progress lines."""
+    res = {}
+    for line in stdout.splitlines():
+        m = STAGE_LINE.match(line)
+        if m and m.group(4) != "running":
+            res[m.group(3)] = "cached" if m.group(4).startswith("skipped") else "ran"
+    return res
+
+
+@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
+                     f"build/release/unjam is missing: build it first "
+                     f"(cmake --build build/release -j2)")
+class ExperimentTiny(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="unjam-experiment-")
+        cls.out = os.path.join(cls.tmp, "exp")
+        cls.first = run(cls.out)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_1_files(self):
+        o = self.out
+        expected = ["sweep.csv", "fixed.csv", "report.md", "stage.json",
+                    "fig1-field.png", "fig1-packing.png", "fig2-profiles.png",
+                    "fig3-friction-sweep.png", "fig4-ensemble.png",
+                    "fig4/N50-mu0.1-s3/ensemble.json", "fig4/N50-mu0.1-s3/stage.json"]
+        for mu in ("0", "0.1", "1"):
+            d = f"packings/N100-mu{mu}-s1"
+            expected += [f"{d}/meta.json", f"{d}/probe_summary.json", f"{d}/probes.csv",
+                         f"{d}/response_profile.csv", f"{d}/stage.json"]
+        for mu in ("0.1", "1"):
+            expected += [f"fixed/N100-mu{mu}/meta.json", f"fixed/N100-mu{mu}/probe_summary.json"]
+        for f in expected:
+            self.assertTrue(os.path.isfile(os.path.join(o, f)), f"missing {f}")
+            self.assertGreater(os.path.getsize(os.path.join(o, f)), 0, f"empty {f}")
+        with open(os.path.join(o, "sweep.csv")) as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual([r["mu"] for r in rows], ["0", "0.1", "1"])
+        with open(os.path.join(o, "fixed.csv")) as f:
+            self.assertEqual(len(list(csv.DictReader(f))), 3)
+        self.assertEqual(set(outcomes(self.first).values()), {"ran"})
+        self.assertEqual(len(outcomes(self.first)), 18)
+
+    def test_2_report_matches_table(self):
+        with open(os.path.join(self.out, "sweep.csv")) as f:
+            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        with open(os.path.join(self.out, "report.md")) as f:
+            report = f.read()
+        section = report.split("## Measured values per mu")[1].split("\n\n")[2]
+        table = [ln for ln in section.splitlines() if ln.startswith("| ")][1:]
+        self.assertEqual(len(table), 3)
+        cols = ["phi", "z", "F_cont_over_F0", "F_crit_over_F_cont", "alpha"]
+        for ln in table:
+            cells = [c.strip() for c in ln.strip("|").split("|")]
+            mu, n, seeds = cells[:3]
+            self.assertEqual((n, seeds), ("100", "1"))
+            for c, cell in zip(cols, cells[3:]):
+                if rows[mu][c] == "":
+                    self.assertEqual(cell, "—", f"mu {mu} {c}")
+                    continue
+                m = re.fullmatch(r"([-\d.]+) ± ([\d.]+)", cell)
+                self.assertIsNotNone(m, f"mu {mu} {c}: {cell!r}")
+                self.assertAlmostEqual(float(m.group(1)), float(rows[mu][c]), delta=0.51e-4)
+                self.assertEqual(float(m.group(2)), 0.0)
+        # the verdict on <F_crit>/<F_cont> names the mu of the measured maximum
+        mu_max = max(rows, key=lambda k: float(rows[k]["F_crit_over_F_cont"]))
+        self.assertIn(f"maximum of <F_crit>/<F_cont> at mu = {mu_max} ", report)
+
+    def test_3_rerun_skips_everything(self):
+        res = outcomes(run(self.out))
+        self.assertEqual(len(res), 18)
+        self.assertEqual({k for k, v in res.items() if v != "cached"}, set())
+
+    def test_4_changed_parameter_reruns_dependent_stages_only(self):
+        res = outcomes(run(self.out, "--probe-g", "2e-9"))
+        ran = {k for k, v in res.items() if v == "ran"}
+        expected = {"probe N100-mu0-s1", "probe N100-mu0.1-s1", "probe N100-mu1-s1",
+                    "probe fixed N100-mu0.1", "probe fixed N100-mu1", "table sweep",
+                    "table fixed", "plot fig3", "plot fig2", "plot fig1"}
+        self.assertEqual(ran, expected)
+        self.assertEqual(len(res), 18)     # the packs, the ensemble and Fig. 4 were cached
+        with open(os.path.join(self.out, "packings/N100-mu0.1-s1/probe_summary.json")) as f:
+            self.assertIn('"g": 2e-09', f.read())
+
+
+if __name__ == "__main__":
+    unittest.main()
