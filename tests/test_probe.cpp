@@ -192,8 +192,16 @@ TEST(ProbeCampaign, SummaryRatioOfMeans) {
   }
   EXPECT_DOUBLE_EQ(sum.F_crit_over_F_cont, f_crit / f_cont);
   EXPECT_GT(sum.F_crit_over_F_cont, 1.3);  // the paper's mu = 0.1 peak: clearly above 1
-  EXPECT_FALSE(sum.has_fit);               // 50 disks: the fit window is empty
+  EXPECT_FALSE(sum.has_fit);               // 50 disks: the default fit window is empty
   EXPECT_FALSE(sum.fit_error.empty());
+  // An explicit window: the fit uses only bins inside it.
+  const CampaignSummary in_window = summarize(p, st, FitWindow{1.0, 5.0});
+  ASSERT_TRUE(in_window.has_fit) << in_window.fit_error;
+  EXPECT_GE(in_window.fit.r_lo, 1.0);
+  EXPECT_LE(in_window.fit.r_hi, 5.0);
+  EXPECT_GE(in_window.fit.bins, 2);
+  EXPECT_TRUE(std::isfinite(in_window.fit.alpha));
+  EXPECT_GT(in_window.fit.alpha_err, 0.0);
 }
 
 }  // namespace

@@ -41,6 +41,7 @@ struct ProbeOptions {
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
+  std::vector<double> fit_window;  // [r_lo, r_hi], empty: the default rule
   bool quiet = false;
 };
 
@@ -106,7 +107,15 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
 }
 
+std::optional<FitWindow> fit_window(const ProbeOptions& o) {
+  if (o.fit_window.empty()) return std::nullopt;
+  if (o.fit_window.size() != 2 || !(o.fit_window[0] > 0.0) || !(o.fit_window[1] > o.fit_window[0]))
+    throw Error("--fit-window takes two distances 0 < r_lo < r_hi");
+  return FitWindow{o.fit_window[0], o.fit_window[1]};
+}
+
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
+  fit_window(o);  // refuse a bad window before any probe runs
   const fs::path checkpoint = out / "probe_checkpoint.json";
   const nlohmann::json settings_json = to_json(s);
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
@@ -155,7 +164,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
                 " probes; run the same command again to resume");
   }
 
-  const CampaignSummary sum = summarize(p, state);
+  const CampaignSummary sum = summarize(p, state, fit_window(o));
   const PackingStats stats = compute_packing_stats(p);
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
   write_file_atomic(out / "response_field.csv", state.average.field_csv());
@@ -244,6 +253,9 @@ void add_probe_command(CLI::App& app) {
                   "displacement in the averages: peculiar, or total (with the affine part of the cell)")->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")->capture_default_str();
+  cmd->add_option("--fit-window", o->fit_window,
+                  "r_lo r_hi of the power-law fit of d(r) (R_max; default [3 <2R>, L/4])")
+      ->expected(2);
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
   cmd->callback([o] { run(*o); });
 }

@@ -116,8 +116,8 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   return true;
 }
 
-CampaignSummary summarize(const Packing& p, const CampaignState& state, int bootstrap_samples,
-                          std::uint64_t seed) {
+CampaignSummary summarize(const Packing& p, const CampaignState& state,
+                          std::optional<FitWindow> window, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;
   sum.probes = static_cast<int>(state.rows.size());
   double f_cont = 0.0, f_crit = 0.0;
@@ -131,7 +131,8 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, int boot
     sum.F_crit_over_F_cont = f_crit / f_cont;
   }
   try {
-    sum.fit = fit_power_law(state.average, default_fit_window(p.cell, 2.0 * p.mean_radius()),
+    sum.fit = fit_power_law(state.average,
+                            window.value_or(default_fit_window(p.cell, 2.0 * p.mean_radius())),
                             bootstrap_samples, seed);
     sum.has_fit = true;
   } catch (const Error& e) {

@@ -6,6 +6,7 @@
 // resume: its state (rows and averages) is saved as JSON and finished probes are skipped.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -80,7 +81,9 @@ ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settin
 void add_to_average(const Packing& packing, const CampaignSettings& settings,
                     const ProbeResult& result, ResponseAverage& average);
 
+// The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
+                          std::optional<FitWindow> window = std::nullopt,
                           int bootstrap_samples = 200, std::uint64_t seed = 1);
 
 nlohmann::json to_json(const CampaignSettings& settings);
