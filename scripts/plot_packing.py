@@ -24,7 +24,6 @@ import unjam_plot as up  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import EllipseCollection, LineCollection  # noqa: E402
-from matplotlib.patches import Rectangle  # noqa: E402
 
 DISK_FACE = "#dce6f2"
 DISK_EDGE = "#7f93ab"
@@ -68,15 +67,7 @@ def main(argv=None):
     height = size * aspect + 0.6
     fig, ax = plt.subplots(figsize=(size, height))
     fig.subplots_adjust(left=0.03, right=0.97, bottom=0.2 / height, top=1 - 0.5 / height)
-    ax.set_xlim(-0.01 * Lx, 1.01 * Lx)
-    ax.set_ylim(-0.01 * Ly, 1.01 * Ly)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    for s in ax.spines.values():
-        s.set_visible(False)
-    cell = Rectangle((0, 0), Lx, Ly, fill=False, edgecolor="0.3", linewidth=0.8, zorder=5)
-    ax.add_patch(cell)
+    cell = up.cell_axes(ax, Lx, Ly)
 
     # Points per length unit, for line widths that follow the disk size.
     fig.canvas.draw()

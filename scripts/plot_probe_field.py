@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import EllipseCollection  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
-from matplotlib.patches import Circle, Rectangle  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
 
 
 def parse_args(argv=None):
@@ -116,15 +116,7 @@ def main(argv=None):
     size = 7.0
     aspect = Ly / Lx
     fig, ax = plt.subplots(figsize=(size + 1.3, size * aspect + 0.8))
-    ax.set_xlim(-0.01 * Lx, 1.01 * Lx)
-    ax.set_ylim(-0.01 * Ly, 1.01 * Ly)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    for s in ax.spines.values():
-        s.set_visible(False)
-    cell = Rectangle((0, 0), Lx, Ly, fill=False, edgecolor="0.3", linewidth=0.8, zorder=5)
-    ax.add_patch(cell)
+    cell = up.cell_axes(ax, Lx, Ly)
 
     idx, xi, yi = up.periodic_images(F["x"], F["y"], R, Lx, Ly)
     dd = 2.0 * R[idx]

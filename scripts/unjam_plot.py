@@ -294,6 +294,22 @@ def periodic_images(x, y, r, Lx, Ly):
 # Output
 
 
+
+def cell_axes(ax, Lx, Ly):
+    """Sets up axes showing the periodic cell [0, Lx] x [0, Ly]: equal aspect, no ticks, the
+    cell outlined. Returns the outline patch (a clip path for what crosses the cell edge)."""
+    from matplotlib.patches import Rectangle
+    ax.set_xlim(-0.01 * Lx, 1.01 * Lx)
+    ax.set_ylim(-0.01 * Ly, 1.01 * Ly)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    for s in ax.spines.values():
+        s.set_visible(False)
+    cell = Rectangle((0, 0), Lx, Ly, fill=False, edgecolor="0.3", linewidth=0.8, zorder=5)
+    ax.add_patch(cell)
+    return cell
+
 def default_out(directory, name):
     return os.path.join(directory, name)
 
