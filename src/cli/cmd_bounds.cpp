@@ -119,7 +119,7 @@ void run_bounds(const BoundsOptions& opt) {
 void add_bounds_command(CLI::App& app) {
   auto opt = std::make_shared<BoundsOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "bounds", "Exact interval [fn_min, fn_max] of every contact's normal force over the "
+      "bounds", "exact interval [fn_min, fn_max] of every contact's normal force over the "
                 "admissible force networks (LP)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");

@@ -327,7 +327,7 @@ void run_ensemble(const EnsembleOptions& opt) {
 void add_ensemble_command(CLI::App& app) {
   auto opt = std::make_shared<EnsembleOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "ensemble", "Admissible force networks: hit-and-run and/or the paper's random walk, LP "
+      "ensemble", "admissible force networks: hit-and-run and/or the paper's random walk, LP "
                   "intervals, eta and F_crit per contact (Fig. 4)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--method", opt->method, "sampler: hit-and-run, walk or both (default)")

@@ -91,7 +91,7 @@ void print_text(const std::string& dir, const Packing& p, const PackingStats& s,
 
 void add_info_command(CLI::App& app) {
   auto opt = std::make_shared<InfoOptions>();
-  CLI::App* cmd = app.add_subcommand("info", "Print the statistics and static checks of a packing");
+  CLI::App* cmd = app.add_subcommand("info", "print the statistics and static checks of a packing");
   cmd->add_option("dir", opt->dir, "Packing directory (meta.json, particles.csv, contacts.csv)")->required();
   cmd->add_flag("--json", opt->json, "Print one JSON object instead of text");
   cmd->add_option("--threshold", opt->threshold, "A contact carries force when fn > threshold * F0")
