@@ -7,21 +7,13 @@
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/hit_and_run.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "fixture_p50.hpp"
 
 namespace {
 
 using unjam::Packing;
 
-struct P50 {
-  Packing packing = unjam::read_packing(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu0.1");
-  unjam::EquilibriumSystem sys = unjam::build_equilibrium_system(packing);
-  unjam::ForceBounds bounds = unjam::compute_force_bounds(sys);
-};
-
-const P50& p50() {
-  static const P50 data;
-  return data;
-}
+using unjam::testing::p50;
 
 // Mean over contacts of (sampled width) / (LP width).
 double coverage(const unjam::HitAndRunResult& r, const unjam::ForceBounds& b) {

@@ -14,21 +14,13 @@
 #include "physics_test_util.hpp"
 #include "unjam/ensemble/random_walk.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "fixture_p50.hpp"
 
 namespace {
 
 using unjam::Packing;
 
-struct P50 {
-  Packing packing = unjam::read_packing(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu0.1");
-  unjam::EquilibriumSystem sys = unjam::build_equilibrium_system(packing);
-  unjam::ForceBounds bounds = unjam::compute_force_bounds(sys);
-};
-
-const P50& p50() {
-  static const P50 data;
-  return data;
-}
+using unjam::testing::p50;
 
 TEST(RandomWalk, EverySampleIsAdmissible) {
   const auto& d = p50();
