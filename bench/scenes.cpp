@@ -83,17 +83,12 @@ Packing static_packing(int N, double mu, std::uint64_t seed) {
   return p;
 }
 
-double packing_fraction(const Packing& p) {
-  double area = 0.0;
-  for (const double R : p.particles.radius) area += disk_mass(R);
-  return area / p.cell.area();
-}
 
 Packing compressing(int N, std::uint64_t seed, double phi_target) {
   Packing p = gas(N, seed);
   p.meta.mu = 0.1;
   const CompactionSettings cs;  // the dynamics of the compaction
-  while (packing_fraction(p) < phi_target) {
+  while (p.packing_fraction() < phi_target) {
     if (p.state.step >= 1'000'000) throw Error("bench scene compressing: phi not reached");
     advance(p, cs.dynamics);
   }

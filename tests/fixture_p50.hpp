@@ -20,4 +20,14 @@ inline const P50& p50() {
   return data;
 }
 
+// A sampled network as the column vector of the balance rows: (fn_0, ft_0, fn_1, ft_1, ...).
+inline Eigen::VectorXd stacked(const ForceNetwork& net) {
+  Eigen::VectorXd x(2 * net.fn.size());
+  for (Eigen::Index k = 0; k < net.fn.size(); ++k) {
+    x[2 * k] = net.fn[k];
+    x[2 * k + 1] = net.ft[k];
+  }
+  return x;
+}
+
 }  // namespace unjam::testing

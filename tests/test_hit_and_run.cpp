@@ -31,14 +31,11 @@ TEST(HitAndRun, EverySampleIsAdmissible) {
   unjam::HitAndRunOptions options;
   options.samples = 2000;
   options.on_sample = [&](const unjam::ForceNetwork& net) {
-    Eigen::VectorXd x(2 * net.fn.size());
     for (Eigen::Index k = 0; k < net.fn.size(); ++k) {
-      x[2 * k] = net.fn[k];
-      x[2 * k + 1] = net.ft[k];
       worst_fn = std::min(worst_fn, net.fn[k]);
       worst_coulomb = std::max(worst_coulomb, std::abs(net.ft[k]) - mu * net.fn[k]);
     }
-    const Eigen::VectorXd r = d.sys.A * x - d.sys.rhs;
+    const Eigen::VectorXd r = d.sys.A * unjam::testing::stacked(net) - d.sys.rhs;
     worst_residual = std::max(worst_residual, r.cwiseAbs().maxCoeff() / d.sys.rhs.norm());
   };
   const auto result = unjam::sample_hit_and_run(d.sys, d.bounds, options);

@@ -30,14 +30,11 @@ TEST(RandomWalk, EverySampleIsAdmissible) {
   unjam::RandomWalkOptions options;
   options.samples = 300;
   options.on_sample = [&](const unjam::ForceNetwork& net) {
-    Eigen::VectorXd x(2 * net.fn.size());
     for (Eigen::Index k = 0; k < net.fn.size(); ++k) {
-      x[2 * k] = net.fn[k];
-      x[2 * k + 1] = net.ft[k];
       worst_fn = std::min(worst_fn, net.fn[k]);
       worst_coulomb = std::max(worst_coulomb, std::abs(net.ft[k]) - mu * net.fn[k]);
     }
-    const Eigen::VectorXd r = d.sys.A * x - d.sys.rhs;
+    const Eigen::VectorXd r = d.sys.A * unjam::testing::stacked(net) - d.sys.rhs;
     worst_balance = std::max(worst_balance, r.head(p_row).cwiseAbs().maxCoeff());
     worst_pressure = std::max(worst_pressure, std::abs(r[p_row]) / d.sys.rhs[p_row]);
   };

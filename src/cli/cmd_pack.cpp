@@ -3,8 +3,6 @@
 // place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
 #include <omp.h>
 
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -20,9 +18,6 @@
 
 namespace unjam::cli {
 namespace {
-
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int sig) { g_signal = sig; }
 
 struct PackOptions {
   GasSettings gas;
@@ -92,16 +87,13 @@ void run(PackOptions& o) {
   }
   hooks.checkpoint = [&](const Packing& q) { write_packing(out, q); };
   hooks.checkpoint_s = o.checkpoint_s;
-  hooks.should_stop = [] { return g_signal != 0; };
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  hooks.should_stop = InterruptGuard::requested;
 
+  const InterruptGuard interrupts;
   std::fprintf(stderr, "unjam pack: N = %zu, mu = %g, P_ext = %g, threads = %d -> %s\n", p.size(),
                p.meta.mu, p.meta.P_ext, omp_get_max_threads(), out.c_str());
   const CompactionResult r = compact(p, o.compaction, hooks);
   write_packing(out, p);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
 
   if (!r.is_static) {
     std::fprintf(stderr,

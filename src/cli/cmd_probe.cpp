@@ -4,9 +4,7 @@
 // the paper's Figs. 1 and 2 and the decay exponent alpha.
 #include <omp.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -28,8 +26,6 @@ namespace unjam::cli {
 namespace {
 
 namespace fs = std::filesystem;
-std::atomic<int> g_signal{0};
-extern "C" void on_probe_signal(int sig) { g_signal = sig; }
 
 struct ProbeOptions {
   std::string dir, out, method = "lp", displacement = "peculiar";
@@ -134,6 +130,9 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   const auto t0 = std::chrono::steady_clock::now();
   auto last_report = t0, last_checkpoint = t0;
   const std::size_t done_before = state.rows.size();
+  const auto save_checkpoint = [&](const CampaignState& st) {
+    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(st)}}.dump());
+  };
   CampaignHooks hooks;
   hooks.progress = [&](int done, int all) {
     const auto now = std::chrono::steady_clock::now();
@@ -147,19 +146,19 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   };
   hooks.checkpoint = [&](const CampaignState& st) {
     const auto now = std::chrono::steady_clock::now();
-    if (std::chrono::duration<double>(now - last_checkpoint).count() < o.checkpoint_s && g_signal == 0) return;
+    if (std::chrono::duration<double>(now - last_checkpoint).count() < o.checkpoint_s && !InterruptGuard::requested()) return;
     last_checkpoint = now;
-    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(st)}}.dump());
+    save_checkpoint(st);
   };
-  hooks.should_stop = [] { return g_signal != 0; };
-  std::signal(SIGINT, on_probe_signal);
-  std::signal(SIGTERM, on_probe_signal);
-  const bool finished = run_campaign(p, s, state, hooks);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  hooks.should_stop = InterruptGuard::requested;
+  bool finished = false;
+  {
+    const InterruptGuard interrupts;
+    finished = run_campaign(p, s, state, hooks);
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!finished) {
-    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(state)}}.dump());
+    save_checkpoint(state);
     throw Error("interrupted after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
   }

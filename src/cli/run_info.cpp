@@ -1,12 +1,29 @@
 #include "cli/run_info.hpp"
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 
 namespace unjam::cli {
 namespace {
 std::string g_command_line;
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int sig) { g_signal = sig; }
+}  // namespace
+
+InterruptGuard::InterruptGuard() {
+  g_signal = 0;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
 }
+
+InterruptGuard::~InterruptGuard() {
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+}
+
+bool InterruptGuard::requested() { return g_signal != 0; }
 
 void set_command_line(int argc, char** argv) {
   g_command_line.clear();

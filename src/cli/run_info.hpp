@@ -11,4 +11,16 @@ const std::string& command_line();
 // "42.0 s", "3 min 05 s", "2 h 10 min".
 std::string format_duration(double seconds);
 
+// While alive, Ctrl-C (SIGINT) and SIGTERM do not kill the process but set a flag that long
+// runs poll, so they stop at a clean point and save their state. The default handlers come
+// back when it goes out of scope, also when the run throws.
+class InterruptGuard {
+ public:
+  InterruptGuard();
+  ~InterruptGuard();
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+  static bool requested();
+};
+
 }  // namespace unjam::cli

@@ -31,16 +31,13 @@ PackingStats compute_packing_stats(const Packing& packing, double force_threshol
   s.F0 = packing.force_unit();
   s.contacts = packing.contacts.size();
 
-  double grain_area = 0.0, kinetic = 0.0;  // sum pi R^2, sum m |v|^2
-  for (std::size_t i = 0; i < s.N; ++i) {
-    grain_area += disk_mass(P.radius[i]);
-    kinetic += P.mass(i) * P.velocity(i).squaredNorm();
-  }
-  s.phi = grain_area / V;
+  double kinetic = 0.0;  // sum m |v|^2
+  for (std::size_t i = 0; i < s.N; ++i) kinetic += P.mass(i) * P.velocity(i).squaredNorm();
+  s.phi = packing.packing_fraction();
 
   // Contacts: force-carrying ones, overlaps, virial, Coulomb and sign checks.
   const double F0 = s.F0;
-  std::vector<bool> carries(s.N, false);
+  const std::vector<char> carries = packing.loaded_grains(force_threshold_F0 * F0);
   double sum_fn_carrying = 0.0, sum_fn = 0.0, sum_overlap = 0.0, virial = 0.0;
   for (const Contact& c : packing.contacts) {
     sum_fn += c.fn;
@@ -53,10 +50,9 @@ PackingStats compute_packing_stats(const Packing& packing, double force_threshol
     if (c.fn > force_threshold_F0 * F0) {
       ++s.N_c;
       sum_fn_carrying += c.fn;
-      carries[c.a] = carries[c.b] = true;
     }
   }
-  s.rattlers = static_cast<std::size_t>(std::count(carries.begin(), carries.end(), false));
+  s.rattlers = static_cast<std::size_t>(std::count(carries.begin(), carries.end(), 0));
   s.N_prime = s.N - s.rattlers;
   s.z = s.N_prime > 0 ? 2.0 * static_cast<double>(s.N_c) / static_cast<double>(s.N_prime) : 0.0;
   if (s.N_c > 0) s.F_cont = sum_fn_carrying / static_cast<double>(s.N_c) / F0;

@@ -7,8 +7,11 @@ namespace unjam {
 
 inline constexpr double kPi = std::numbers::pi;
 
+// Area of a disk of radius R: pi R^2.
+inline double disk_area(double R) { return kPi * R * R; }
+
 // Mass of a disk of radius R at areal density 1: m = pi R^2.
-inline double disk_mass(double R) { return kPi * R * R; }
+inline double disk_mass(double R) { return disk_area(R); }
 
 // Moment of inertia of a uniform disk: I = m R^2 / 2.
 inline double disk_inertia(double R) { return 0.5 * disk_mass(R) * R * R; }

@@ -12,6 +12,13 @@ double Packing::mean_radius() const {
   return std::accumulate(R.begin(), R.end(), 0.0) / static_cast<double>(R.size());
 }
 
+std::vector<char> Packing::loaded_grains(double fn_min) const {
+  std::vector<char> loaded(size(), 0);
+  for (const Contact& c : contacts)
+    if (c.fn > fn_min) loaded[c.a] = loaded[c.b] = 1;
+  return loaded;
+}
+
 double Packing::force_unit() const { return unjam::force_unit(mean_radius(), meta.P_ext); }
 
 }  // namespace unjam

@@ -3,6 +3,7 @@
 // On disk it is a directory (meta.json, particles.csv, contacts.csv), see docs/packing-format.md.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -39,6 +40,9 @@ struct Packing {
   std::size_t size() const { return particles.size(); }
   double mean_radius() const;
   double force_unit() const;  // F0 = 2 R_avg P_ext
+  double packing_fraction() const { return particles.area() / cell.area(); }
+  // Grains with a contact carrying fn > fn_min (simulation units); the others are rattlers.
+  std::vector<char> loaded_grains(double fn_min) const;
 };
 
 }  // namespace unjam

@@ -13,15 +13,10 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
                 std::to_string(packing.contacts.size()) + ")");
   Contacts contacts = packing.contacts;
   Particles particles = packing.particles;
-  std::fill(particles.vx.begin(), particles.vx.end(), 0.0);
-  std::fill(particles.vy.begin(), particles.vy.end(), 0.0);
-  std::fill(particles.omega.begin(), particles.omega.end(), 0.0);
 
-  StepProblem pb{packing.cell, set.dt, packing.meta.mu, set.bath, 0.0, {}};
+  StepProblem pb{packing.cell, set.dt, packing.meta.mu, set.bath, 0.0,
+                 touching_gaps(contacts, set.touch_gap)};
   pb.bath.P_ext = packing.meta.P_ext;
-  pb.g_eff.resize(contacts.size());
-  for (std::size_t k = 0; k < contacts.size(); ++k)
-    pb.g_eff[k] = contacts[k].gap < set.touch_gap ? 0.0 : contacts[k].gap;
   pb.g_eff[contact] = -set.g;
 
   NlgsSettings nlgs;
@@ -41,9 +36,7 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   constexpr int kChunk = 1'000'000;
   NlgsResult res;
   while (r.sweeps < set.max_sweeps) {
-    std::fill(particles.vx.begin(), particles.vx.end(), 0.0);
-    std::fill(particles.vy.begin(), particles.vy.end(), 0.0);
-    std::fill(particles.omega.begin(), particles.omega.end(), 0.0);
+    particles.stop();
     nlgs.max_sweeps = static_cast<int>(std::min<long long>(kChunk, set.max_sweeps - r.sweeps));
     nlgs.seed = set.seed + static_cast<std::uint64_t>(r.sweeps);
     res = solve_nlgs(pb, nlgs, contacts, particles);

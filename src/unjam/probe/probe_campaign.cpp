@@ -14,15 +14,6 @@
 namespace unjam {
 namespace {
 
-// Grains with a force-carrying contact: the others (rattlers) stay out of the averages.
-std::vector<char> loaded_grains(const Packing& p, double threshold_F0) {
-  std::vector<char> loaded(p.size(), 0);
-  const double f_min = threshold_F0 * p.force_unit();
-  for (const Contact& c : p.contacts)
-    if (c.fn > f_min) loaded[c.a] = loaded[c.b] = 1;
-  return loaded;
-}
-
 ProbeRow row_of(const ProbeResult& r) {
   return {r.contact, r.a,        r.b,        r.f_cont,    r.f_crit,
           r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt};
@@ -37,6 +28,27 @@ struct Worker {
     return kinematic->probe(contact);
   }
 };
+
+// Adds one probe's field to the averages: the grains of `loaded` (rattlers stay out), their
+// displacement / g in the contact frame.
+void add_to_average(const Packing& p, const CampaignSettings& s, const std::vector<char>& loaded,
+                    const ProbeResult& r, ResponseAverage& average) {
+  FrameField field;
+  const ContactFrame frame = contact_frame(p.particles, p.contacts[r.contact]);
+  std::vector<double> x, y;
+  std::vector<Vec2> u;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!loaded[i]) continue;
+    x.push_back(p.particles.x[i]);
+    y.push_back(p.particles.y[i]);
+    Vec2 ui = r.u[i];
+    // Affine part of the cell's strain, relative to the contact point.
+    if (s.total_displacement) ui += r.lambda_dt * p.cell.min_image(p.particles.position(i) - frame.origin);
+    u.push_back(ui);
+  }
+  to_contact_frame(frame, p.cell, x, y, u, field);
+  average.add_probe(r.contact, field, r.g);
+}
 
 }  // namespace
 
@@ -59,32 +71,13 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
   return w.probe(p, s, contact);
 }
 
-void add_to_average(const Packing& p, const CampaignSettings& s, const ProbeResult& r,
-                    ResponseAverage& average) {
-  FrameField field;
-  const ContactFrame frame = contact_frame(p.particles, p.contacts[r.contact]);
-  const std::vector<char> loaded = loaded_grains(p, s.force_threshold);
-  std::vector<double> x, y;
-  std::vector<Vec2> u;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!loaded[i]) continue;
-    x.push_back(p.particles.x[i]);
-    y.push_back(p.particles.y[i]);
-    Vec2 ui = r.u[i];
-    // Affine part of the cell's strain, relative to the contact point.
-    if (s.total_displacement) ui += r.lambda_dt * p.cell.min_image(p.particles.position(i) - frame.origin);
-    u.push_back(ui);
-  }
-  to_contact_frame(frame, p.cell, x, y, u, field);
-  average.add_probe(r.contact, field, r.g);
-}
-
 bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
                   const CampaignHooks& hooks) {
   const std::vector<int> all = campaign_targets(p, s);
   std::vector<int> todo;
   for (const int k : all)
     if (!state.average.has_probe(k)) todo.push_back(k);
+  const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   const int threads = omp_get_max_threads();
   std::vector<Worker> workers(threads);
   // Batches of a few probes per thread: between batches the state is merged, reported,
@@ -105,7 +98,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
     }
     for (int j = 0; j < n; ++j) {
       if (!results[j]) throw Error("probe of contact " + std::to_string(todo[start + j]) + ": " + errors[j]);
-      add_to_average(p, s, *results[j], state.average);
+      add_to_average(p, s, loaded, *results[j], state.average);
       state.rows.push_back(row_of(*results[j]));
     }
     std::sort(state.rows.begin(), state.rows.end(),

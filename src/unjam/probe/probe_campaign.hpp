@@ -77,10 +77,6 @@ bool run_campaign(const Packing& packing, const CampaignSettings& settings, Camp
 // Probes one contact with the campaign's method.
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
 
-// Adds one probe's field (non-rattler grains, displacement / g in the contact frame).
-void add_to_average(const Packing& packing, const CampaignSettings& settings,
-                    const ProbeResult& result, ResponseAverage& average);
-
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
                           std::optional<FitWindow> window = std::nullopt,

@@ -16,12 +16,6 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-double packing_fraction(const Packing& p) {
-  double area = 0.0;
-  for (const double R : p.particles.radius) area += disk_mass(R);
-  return area / p.cell.area();
-}
-
 }  // namespace
 
 void validate(const CompactionSettings& s, double mu) {
@@ -38,9 +32,7 @@ void validate(const CompactionSettings& s, double mu) {
 }
 
 double mean_speed_of_loaded_grains(const Packing& p) {
-  std::vector<char> loaded(p.size(), 0);
-  for (const Contact& c : p.contacts)
-    if (c.fn > 0.0) loaded[c.a] = loaded[c.b] = 1;
+  const std::vector<char> loaded = p.loaded_grains(0.0);
   double sum = 0.0;
   int count = 0;
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -104,11 +96,11 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
     }
 
     const double now_s = seconds_since(start);
-    if (hooks.progress && std::chrono::duration<double>(Clock::now() - last_progress).count() >= hooks.progress_s) {
+    if (hooks.progress && seconds_since(last_progress) >= hooks.progress_s) {
       CompactionProgress pr;
       pr.step = p.state.step;
       pr.time = p.state.time;
-      pr.phi = packing_fraction(p);
+      pr.phi = p.packing_fraction();
       pr.P_ratio = P_ratio;
       pr.v_mean = v_mean;
       pr.sweeps_per_step = static_cast<double>(sweeps_since_report) / std::max<std::int64_t>(1, steps_since_report);
@@ -126,7 +118,7 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
       last_progress = Clock::now();
       sweeps_since_report = steps_since_report = 0;
     }
-    if (hooks.checkpoint && std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= hooks.checkpoint_s) {
+    if (hooks.checkpoint && seconds_since(last_checkpoint) >= hooks.checkpoint_s) {
       hooks.checkpoint(p);
       last_checkpoint = Clock::now();
     }

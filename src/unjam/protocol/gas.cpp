@@ -21,12 +21,8 @@ Packing make_gas(const GasSettings& s) {
   std::uniform_real_distribution<double> radius(s.R_min, s.R_max), unit(0.0, 1.0);
   Packing p;
   p.particles.resize(static_cast<std::size_t>(s.N));
-  double area = 0.0;
-  for (int i = 0; i < s.N; ++i) {
-    p.particles.radius[i] = radius(rng);
-    area += disk_mass(p.particles.radius[i]);  // pi R^2 at unit density
-  }
-  const double L = std::sqrt(area / s.phi);
+  for (int i = 0; i < s.N; ++i) p.particles.radius[i] = radius(rng);
+  const double L = std::sqrt(p.particles.area() / s.phi);
   p.cell = {L, L};
 
   // Random sequential placement, with a grid of buckets of side >= 2 R_max to find

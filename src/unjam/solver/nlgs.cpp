@@ -10,7 +10,6 @@
 #include <random>
 #include <vector>
 
-#include "unjam/core/units.hpp"
 #include "unjam/solver/coloring.hpp"
 
 namespace unjam {
@@ -67,8 +66,25 @@ struct Sweeper {
                  : pb.lambda_t;
   }
 
+  // Applies the force change (dRn, dRt) of contact r to its two bodies: the impulse on b is
+  // dt (dRn n + dRt t), t = (-n_y, n_x), on a its negative; torques T_a = -R_a R_t,
+  // T_b = -R_b R_t.
+  void apply_impulse(const Row& r, double dRn, double dRt) {
+    const double dt = pb.dt;
+    Body& A = body[r.a];
+    Body& B = body[r.b];
+    const double px = dt * (dRn * r.nx - dRt * r.ny);
+    const double py = dt * (dRn * r.ny + dRt * r.nx);
+    A.vx -= px * A.inv_m;
+    A.vy -= py * A.inv_m;
+    B.vx += px * B.inv_m;
+    B.vy += py * B.inv_m;
+    A.w -= dt * dRt * r.RaIa;
+    B.w -= dt * dRt * r.RbIb;
+  }
+
   // Solves contact r given all others; applies its force change to the two bodies.
-  void update(Row& r, Tally& t, double alpha) {
+  void update(Row& r, Tally& t) {
     const double dt = pb.dt;
     Body& A = body[r.a];
     Body& B = body[r.b];
@@ -91,24 +107,16 @@ struct Sweeper {
       Rt = std::clamp(r.Rt + set.relax * (Rt - r.Rt), -pb.mu * Rn, pb.mu * Rn);
     }
     const double dRn = Rn - r.Rn, dRt = Rt - r.Rt;
-    // Impulse on b (on a its negative): dt (dRn n + dRt t), t = (-n_y, n_x).
-    const double px = dt * (dRn * r.nx - dRt * r.ny);
-    const double py = dt * (dRn * r.ny + dRt * r.nx);
     const double KA = A.vx * A.vx + A.vy * A.vy, KB = B.vx * B.vx + B.vy * B.vy;
-    A.vx -= px * A.inv_m;
-    A.vy -= py * A.inv_m;
-    B.vx += px * B.inv_m;
-    B.vy += py * B.inv_m;
-    A.w -= dt * dRt * r.RaIa;  // T_a = -R_a R_t
-    B.w -= dt * dRt * r.RbIb;  // T_b = -R_b R_t
+    apply_impulse(r, dRn, dRt);
     t.dK += (A.vx * A.vx + A.vy * A.vy - KA) / A.inv_m + (B.vx * B.vx + B.vy * B.vy - KB) / B.inv_m;
     t.dS += dRn * r.len;
     t.max_dU = std::max(t.max_dU, dt * std::max(std::abs(dRn) * r.inv_mn, std::abs(dRt) * r.inv_mt));
     // Force-change criteria of [D].
     const double d2 = dRn * dRn + dRt * dRt;
     const double s2 = (Rn + r.Rn) * (Rn + r.Rn) + (Rt + r.Rt) * (Rt + r.Rt);
-    if (d2 <= alpha * s2) ++t.rel_ok;
-    else if (d2 >= alpha * R_avg * R_avg) ++t.abs_fail;
+    if (d2 <= set.tol * s2) ++t.rel_ok;
+    else if (d2 >= set.tol * R_avg * R_avg) ++t.abs_fail;
     t.sum_absR += std::sqrt(Rn * Rn + Rt * Rt);
     t.sum_Rn += Rn;
     r.Rn = Rn;
@@ -162,7 +170,6 @@ NlgsResult solve_nlgs(const StepProblem& pb, const NlgsSettings& set, Contacts& 
                       Particles& particles) {
   const int n = static_cast<int>(particles.size());
   const int nc = static_cast<int>(contacts.size());
-  const double dt = pb.dt;
   Sweeper s{pb, set, {}, {}, {}, {}, {}, {}};
   s.V = pb.cell.area();
   s.body.resize(n);
@@ -189,16 +196,8 @@ NlgsResult solve_nlgs(const StepProblem& pb, const NlgsSettings& set, Contacts& 
   }
 
   // Warm start: apply the initial forces to the free velocities.
-  for (Row& r : s.row) {
-    const double px = dt * (r.Rn * r.nx - r.Rt * r.ny), py = dt * (r.Rn * r.ny + r.Rt * r.nx);
-    Body& A = s.body[r.a];
-    Body& B = s.body[r.b];
-    A.vx -= px * A.inv_m;
-    A.vy -= py * A.inv_m;
-    B.vx += px * B.inv_m;
-    B.vy += py * B.inv_m;
-    A.w -= dt * r.Rt * r.RaIa;
-    B.w -= dt * r.Rt * r.RbIb;
+  for (const Row& r : s.row) {
+    s.apply_impulse(r, r.Rn, r.Rt);
     s.S += r.Rn * r.len;
     s.R_avg += std::hypot(r.Rn, r.Rt);
   }
@@ -254,7 +253,7 @@ NlgsResult solve_nlgs(const StepProblem& pb, const NlgsSettings& set, Contacts& 
           for (int blk = color_first_block[color]; blk < color_first_block[color + 1]; ++blk) {
             Tally t;
             for (int q = block_start[blk], e = block_end(blk, color); q < e; ++q)
-              s.update(s.row[q], t, set.tol);
+              s.update(s.row[q], t);
             tally[blk] = t;
           }
 #pragma omp single

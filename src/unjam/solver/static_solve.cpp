@@ -11,9 +11,7 @@ namespace unjam {
 namespace {
 
 void set_at_rest(Packing& p) {
-  std::fill(p.particles.vx.begin(), p.particles.vx.end(), 0.0);
-  std::fill(p.particles.vy.begin(), p.particles.vy.end(), 0.0);
-  std::fill(p.particles.omega.begin(), p.particles.omega.end(), 0.0);
+  p.particles.stop();
   p.state.lambda = 0.0;
 }
 
@@ -21,10 +19,7 @@ void set_at_rest(Packing& p) {
 
 StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSettings& set) {
   update_contact_geometry(p.particles, p.cell, p.contacts);
-  StepProblem pb{p.cell, set.dt, p.meta.mu, bath, 0.0, {}};
-  pb.g_eff.resize(p.contacts.size());
-  for (std::size_t k = 0; k < p.contacts.size(); ++k)
-    pb.g_eff[k] = p.contacts[k].gap < set.touch_gap ? 0.0 : p.contacts[k].gap;
+  const StepProblem pb{p.cell, set.dt, p.meta.mu, bath, 0.0, touching_gaps(p.contacts, set.touch_gap)};
 
   NlgsSettings nlgs;
   nlgs.rule = Convergence::kStatic;

@@ -32,4 +32,8 @@ struct StepProblem {
 // g_eff = max(gap, 0) for every contact.
 std::vector<double> positive_gaps(const Contacts& contacts);
 
+// g_eff of a static packing's contacts: 0 for pairs that touch (gap < touch_gap, overlaps
+// included), the gap otherwise. The static solve and the probe use it.
+std::vector<double> touching_gaps(const Contacts& contacts, double touch_gap);
+
 }  // namespace unjam
