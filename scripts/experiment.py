@@ -8,7 +8,8 @@ Usage:  /usr/bin/python3 scripts/experiment.py --scale demo|tiny|paper [--out ru
 Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subprocess):
 
   pack/probe   for every (mu, N, seed) of the scale: `unjam pack` into
-               OUT/packings/N{N}-mu{mu}-s{seed}, then `unjam probe DIR --all --method lp`;
+               OUT/packings/N{N}-mu{mu}-s{seed}, then `unjam probe DIR --all --method lp`
+               (`--sample K` at the paper scale: K seeded contacts per packing);
   fixed        the mu = 0 packing of the first N and seed re-relaxed at every other mu
                (`unjam pack --from`) into OUT/fixed/N{N}-mu{mu}, probed the same way
                (the paper's Fig. 3b inset);
@@ -48,12 +49,15 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCRIPTS = os.path.join(REPO, "scripts")
 PY = sys.executable or "/usr/bin/python3"
 
-# The scales, as data.  samples: ensemble networks for Fig. 4.
+# The scales, as data.  samples: ensemble networks for Fig. 4; probe_sample: contacts probed
+# per packing (a seeded subset; 0 = every force-carrying contact).
 SCALES = {
-    "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000},
-    "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000},
+    "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0},
+    "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
+             "probe_sample": 0},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
-              "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000},
+              "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
+              "probe_sample": 1000},
 }
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 FIG1_MU = 0.5
@@ -230,8 +234,9 @@ def pack_stage(R, name, d, pack_args, deps=()):
                  os.path.join(d, "stage.json"), params, run, lambda: packing_static(d), deps)
 
 
-def probe_stage(R, name, d, g, dep):
-    args = ["--all", "--method", "lp", "--g", repr(g)]
+def probe_stage(R, name, d, g, sample, dep):
+    """`unjam probe --all`, or `--sample K` (seeded, K per packing) when sample > 0."""
+    args = (["--sample", str(sample)] if sample else ["--all"]) + ["--method", "lp", "--g", repr(g)]
     params = {"command": ["unjam", "probe", d] + args, "version": R.version}
 
     def run(st):
@@ -241,7 +246,7 @@ def probe_stage(R, name, d, g, dep):
                 if os.path.exists(p):
                     os.remove(p)
         R.call(st, R.unjam_cmd("probe", d, *args, "--quiet"))
-    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --all",
+    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(args[:2 if sample else 1])}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
 
 
@@ -439,7 +444,9 @@ def write_report(path, args, cfg, R, figures, argv):
     L += ["", "## Parameters", "",
           f"- scale: {args.scale}",
           f"- mu: {cfg['mus']}", f"- N: {cfg['ns']}", f"- seeds: {cfg['seeds']}",
-          f"- probe: lp, g = {args.probe_g:g}",
+          f"- probe: lp, g = {args.probe_g:g}, "
+          + (f"{cfg['probe_sample']} contacts per packing (seeded subset)" if cfg["probe_sample"]
+             else "every force-carrying contact"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",
           f"- unjam: `{R.unjam}`, version `{R.version}`",
@@ -474,11 +481,15 @@ def parse_args(argv):
     p.add_argument("--ns", type=int, nargs="+", help="override the scale's N list")
     p.add_argument("--seeds", type=int, nargs="+", help="override the scale's seed list")
     p.add_argument("--samples", type=int, help="override the scale's ensemble samples (Fig. 4)")
+    p.add_argument("--probe-sample", type=int, help="override the scale's contacts probed per "
+                   "packing (a seeded subset; 0 = all)")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     args = p.parse_args(argv)
     if args.threads < 0:
         p.error("--threads must be >= 0")
+    if args.probe_sample is not None and args.probe_sample < 0:
+        p.error("--probe-sample must be >= 0")
     if not (os.path.isfile(args.unjam) and os.access(args.unjam, os.X_OK)):
         p.error(f"no unjam binary at {args.unjam} (build it: cmake --build build/release -j2)")
     return args
@@ -496,7 +507,8 @@ def build(args, cfg, R):
                 tag = f"N{n}-mu{fmt_mu(mu)}-s{seed}"
                 stages.append(pack_stage(R, f"pack {tag}", d,
                                          ["--n", n, "--mu", fmt_mu(mu), "--seed", seed]))
-                stages.append(probe_stage(R, f"probe {tag}", d, args.probe_g, f"pack {tag}"))
+                stages.append(probe_stage(R, f"probe {tag}", d, args.probe_g,
+                                          cfg["probe_sample"], f"pack {tag}"))
                 probe_of[(mu, n, seed)] = (f"probe {tag}", d)
                 sweep_entries.append((d, mu, n, seed))
     # The fixed-packing series: the mu = 0 packing of the first N and seed at every other mu.
@@ -511,7 +523,8 @@ def build(args, cfg, R):
             tag = f"fixed N{n0}-mu{fmt_mu(mu)}"
             stages.append(pack_stage(R, f"pack {tag}", d, ["--from", src, "--mu", fmt_mu(mu)],
                                      deps=[f"pack N{n0}-mu0-s{s0}"]))
-            stages.append(probe_stage(R, f"probe {tag}", d, args.probe_g, f"pack {tag}"))
+            stages.append(probe_stage(R, f"probe {tag}", d, args.probe_g, cfg["probe_sample"],
+                                      f"pack {tag}"))
             fixed_entries.append((d, mu, n0, s0))
     # Fig. 4
     d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
@@ -554,13 +567,18 @@ def build(args, cfg, R):
     stages.append(plot_stage(R, "plot fig3", [fig3], [cmd3],
                              ["table sweep"] + (["table fixed"] if fixed_entries else [])))
     nmax, s0 = max(cfg["ns"]), cfg["seeds"][0]
-    prof_dirs = [probe_of[(mu, nmax, s0)][1] for mu in cfg["mus"]]
-    fig2 = os.path.join(out, "fig2-profiles.png")
-    stages.append(plot_stage(
-        R, "plot fig2", [fig2],
-        [[PY, os.path.join(SCRIPTS, "plot_profile.py"), *prof_dirs, "--labels",
-          *[f"mu = {fmt_mu(mu)}" for mu in cfg["mus"]], "--out", fig2]],
-        [probe_of[(mu, nmax, s0)][0] for mu in cfg["mus"]]))
+    # Fig. 2 per size: d(r) of every mu (first seed); fig2-profiles.png is the largest N.
+    fig2_of = {}
+    for n in cfg["ns"]:
+        fig2_of[n] = os.path.join(out, "fig2-profiles.png" if n == nmax
+                                  else f"fig2-profiles-N{n}.png")
+        prof_dirs = [probe_of[(mu, n, s0)][1] for mu in cfg["mus"]]
+        stages.append(plot_stage(
+            R, "plot fig2" if n == nmax else f"plot fig2 N{n}", [fig2_of[n]],
+            [[PY, os.path.join(SCRIPTS, "plot_profile.py"), *prof_dirs, "--labels",
+              *[f"mu = {fmt_mu(mu)}" for mu in cfg["mus"]], "--out", fig2_of[n]]],
+            [probe_of[(mu, n, s0)][0] for mu in cfg["mus"]]))
+    fig2 = fig2_of[nmax]
     mu1 = FIG1_MU if FIG1_MU in cfg["mus"] else max(cfg["mus"])
     name1, d1 = probe_of[(mu1, nmax, s0)]
     fig1f = os.path.join(out, "fig1-field.png")
@@ -573,6 +591,7 @@ def build(args, cfg, R):
                (f"Fig. 1: the packing and its force chains, N = {nmax}, mu = {fmt_mu(mu1)}",
                 fig1p),
                (f"Fig. 2: d(r) per mu, N = {nmax}", fig2),
+               *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
                ("Fig. 3: friction sweep (with the fixed-packing inset)", fig3),
                (f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
     return stages, figures
@@ -582,7 +601,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
-    for k in ("mus", "ns", "seeds", "samples"):
+    for k in ("mus", "ns", "seeds", "samples", "probe_sample"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

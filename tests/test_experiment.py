@@ -5,6 +5,7 @@ Skipped when build/release/unjam is missing.
 """
 
 import csv
+import json
 import os
 import re
 import shutil
@@ -116,6 +117,36 @@ class ExperimentTiny(unittest.TestCase):
         self.assertEqual(len(res), 18)     # the packs, the ensemble and Fig. 4 were cached
         with open(os.path.join(self.out, "packings/N100-mu0.1-s1/probe_summary.json")) as f:
             self.assertIn('"g": 2e-09', f.read())
+
+    def test_5_stopped_pack_stage_resumes(self):
+        # An experiment stopped inside `unjam pack` leaves a resumable packing directory and
+        # the stage record "running". Made here deterministically: the packing is redone up
+        # to --max-steps (unjam saves it, not static, and exits 1) and the record set back to
+        # running. The re-run must resume it (unjam pack --resume), reach the same bytes as
+        # the uninterrupted run, and recompute only what depends on it. (--probe-g as left by
+        # test_4, so the probes of the other packings stay cached.)
+        d = os.path.join(self.out, "packings", "N100-mu1-s1")
+        with open(os.path.join(d, "particles.csv")) as f:
+            before = f.read()
+        with open(os.path.join(d, "stage.json")) as f:
+            records = json.load(f)
+        shutil.rmtree(d)
+        p = subprocess.run([UNJAM, "pack", "--n", "100", "--mu", "1", "--seed", "1", "--out", d,
+                            "--max-steps", "200", "--quiet"], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("resume with: unjam pack --resume", p.stderr)
+        records["pack N100-mu1-s1"]["status"] = "running"
+        with open(os.path.join(d, "stage.json"), "w") as f:
+            json.dump(records, f)
+
+        res = outcomes(run(self.out, "--probe-g", "2e-9"))
+        ran = {k for k, v in res.items() if v == "ran"}
+        self.assertEqual(ran, {"pack N100-mu1-s1", "probe N100-mu1-s1", "table sweep",
+                               "plot fig3", "plot fig2", "plot fig1"})
+        with open(os.path.join(self.out, "logs", "pack_N100-mu1-s1.log")) as f:
+            self.assertIn("pack --resume", f.read())
+        with open(os.path.join(d, "particles.csv")) as f:
+            self.assertEqual(f.read(), before, "the resumed packing differs")
 
 
 if __name__ == "__main__":

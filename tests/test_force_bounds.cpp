@@ -117,6 +117,28 @@ TEST(ForceBounds, Lattice16MatchesReference) {
   expect_matches_reference("lattice16", unjam::LpMethod::simplex, 1);
 }
 
+TEST(ForceBounds, MinimaCertifiedByArgmaxNetworksEqualTheirOwnLp) {
+  // compute_force_bounds skips the min LP of a contact that some argmax network leaves open;
+  // every minimum must equal the plain LP of that contact, and some must have been skipped.
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const auto bounds = unjam::compute_force_bounds(sys);
+  EXPECT_GT(bounds.min_lps_skipped, 5);
+  EXPECT_LT(bounds.min_lps_skipped, sys.num_contacts());
+  unjam::ForceLP lp(sys);
+  const double F0 = p.force_unit();
+  int zeros = 0;
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    const double direct = lp.min_fn(k);
+    EXPECT_NEAR(bounds.fn_min[k], direct, 1e-8 * F0) << "contact " << k;
+    if (bounds.fn_min[k] == 0.0) {
+      ++zeros;
+      EXPECT_LE(direct, 1e-9 * F0) << "contact " << k << " certified open";
+    }
+  }
+  EXPECT_GE(zeros, bounds.min_lps_skipped);
+}
+
 TEST(ForceBounds, PackingNetworkLiesInsideEveryInterval) {
   for (const char* name : {"p50-mu0.1", "lattice16"}) {
     const Packing p = unjam::read_packing(fixture_dir(name));

@@ -10,8 +10,10 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
+#include <omp.h>
 
 #include "cli/commands.hpp"
+#include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
@@ -27,7 +29,7 @@ struct BoundsOptions {
   std::string out;          // CSV path; default DIR/bounds.csv, JSON beside it
   double gap_tol = 1e-9;    // touching: gap <= gap_tol (units of R_max)
   double fn_tol = 1e-9;     // force-carrying: fn > fn_tol F0
-  int threads = 1;
+  int threads = 0;          // 0: all cores
   std::string method = "barrier";
 };
 
@@ -46,7 +48,7 @@ void run_bounds(const BoundsOptions& opt) {
   const double rank_seconds = seconds_since(t_rank);
 
   ForceBoundsOptions lp;
-  lp.threads = opt.threads;
+  lp.threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
   lp.method = opt.method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
   const int Nc = sys.num_contacts();
   if (Nc >= 500) {
@@ -54,7 +56,10 @@ void run_bounds(const BoundsOptions& opt) {
     lp.progress = [&next_report, t_lp = std::chrono::steady_clock::now()](int done, int total) {
       if (done < next_report && done < total) return;
       next_report = done + std::max(1, total / 20);
-      std::fprintf(stderr, "bounds: %d / %d contacts, %.1f s\n", done, total, seconds_since(t_lp));
+      const double t = seconds_since(t_lp);
+      std::fprintf(stderr, "bounds: %d / %d LPs, %s elapsed, ETA %s\n", done, total,
+                   format_duration(t).c_str(),
+                   done > 0 ? format_duration(t * (total - done) / done).c_str() : "?");
     };
   }
   const ForceBounds bounds = compute_force_bounds(sys, lp);
@@ -95,8 +100,10 @@ void run_bounds(const BoundsOptions& opt) {
       {"dimension", rank.dimension},
       {"mean_width_over_mean_fn", width_over_fn},
       {"parameters",
-       {{"gap_tol", opt.gap_tol}, {"fn_tol_F0", opt.fn_tol}, {"threads", opt.threads},
+       {{"gap_tol", opt.gap_tol}, {"fn_tol_F0", opt.fn_tol}, {"threads", lp.threads},
         {"method", opt.method}, {"lp_tolerance", lp.tolerance}}},
+      {"min_lps_skipped", bounds.min_lps_skipped},
+      {"group_lps", bounds.group_lps},
       {"iterations", bounds.iterations},
       {"timings_s",
        {{"read_and_build", t_build}, {"rank", rank_seconds}, {"lp", bounds.seconds},
@@ -109,8 +116,10 @@ void run_bounds(const BoundsOptions& opt) {
   std::printf("dimension          %d (cone columns %d, rank %d)\n", rank.dimension, rank.columns,
               rank.rank);
   std::printf("mean width / <fn>  %.6g\n", width_over_fn);
+  std::printf("fn_min = 0 without own LP  %d contacts (%d group LPs)\n", bounds.min_lps_skipped,
+              bounds.group_lps);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
-              Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), opt.threads);
+              Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
   std::printf("wrote              %s, %s\n", csv_path.string().c_str(), json_path.string().c_str());
 }
 
@@ -125,7 +134,9 @@ void add_bounds_command(CLI::App& app) {
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
   cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)");
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0");
-  cmd->add_option("--threads", opt->threads, "OpenMP threads")->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
       ->check(CLI::IsMember({"barrier", "simplex"}));
   cmd->callback([opt] { run_bounds(*opt); });

@@ -1,0 +1,131 @@
+// Benchmarks of the fast probe and of the force-bounds LPs on the static scenes (mu = 0.1,
+// seed 1; bench/scenes.hpp). Each checks its result (SkipWithError on failure);
+// docs/benchmarks.md has the numbers and the commands.
+//
+//   BM_KinematicProbe/N   KinematicProbe::probe on kProbes contacts spread over the packing
+//                         (one thread): s per probe; F_crit >= F_cont (the LP maximum is at
+//                         least the packing's own force), the field opens the pair by g with
+//                         no unilateral violation. Counter model_s: building the LP model.
+//   BM_ForceLp/N          ForceLP min and max of fn on the same contacts (barrier, one
+//                         thread): s per LP; fn_min <= fn <= fn_max.
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <chrono>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "scenes.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/probe/kinematic_probe.hpp"
+
+namespace {
+
+using namespace unjam;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kMu = 0.1;
+constexpr int kProbes = 8;  // contacts per benchmark, spread evenly over the contact list
+
+const Packing& scene(int N) {
+  static std::map<int, Packing> cache;
+  auto it = cache.find(N);
+  if (it == cache.end()) {
+    omp_set_num_threads(1);
+    it = cache.emplace(N, bench::static_packing(N, kMu, 1)).first;
+  }
+  return it->second;
+}
+
+// kProbes force-carrying contacts (fn > 0.1 F0), evenly spaced in the contact list.
+std::vector<int> probed_contacts(const Packing& p) {
+  std::vector<int> loaded;
+  for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k)
+    if (p.contacts[k].fn > 0.1 * p.force_unit()) loaded.push_back(k);
+  std::vector<int> picked;
+  for (int i = 0; i < kProbes; ++i)
+    picked.push_back(loaded[loaded.size() * i / kProbes]);
+  return picked;
+}
+
+double opening(const Packing& p, const ProbeResult& r, int k) {
+  const Contact& c = p.contacts[k];
+  return (r.u[c.b] - r.u[c.a]).dot(c.n) + r.lambda_dt * c.l.norm();
+}
+
+void BM_KinematicProbe(benchmark::State& state) {
+  const int N = static_cast<int>(state.range(0));
+  const Packing& p = scene(N);
+  const std::vector<int> contacts = probed_contacts(p);
+  omp_set_num_threads(1);
+  const auto t0 = Clock::now();
+  KinematicProbe probe(p, {});
+  state.counters["model_s"] = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::vector<ProbeResult> results;
+  for (auto _ : state) {
+    results.clear();
+    for (const int k : contacts) results.push_back(probe.probe(k));
+  }
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const ProbeResult& r = results[i];
+    const double open = opening(p, r, contacts[i]) / r.g;
+    if (!(r.f_crit >= r.f_cont * (1.0 - 1e-6)) || r.violations != 0 || !(std::abs(open - 1.0) < 0.1)) {
+      state.SkipWithError(("probe of contact " + std::to_string(contacts[i]) + " fails its check")
+                              .c_str());
+      return;
+    }
+  }
+  state.counters["probes"] = kProbes;
+  state.counters["s_per_probe"] =
+      benchmark::Counter(kProbes, benchmark::Counter::kIsIterationInvariantRate |
+                                      benchmark::Counter::kInvert);
+  state.counters["contacts"] = static_cast<double>(probe.system().num_contacts());
+  state.counters["rows"] = static_cast<double>(probe.system().A.rows());
+}
+BENCHMARK(BM_KinematicProbe)
+    ->ArgName("N")->Arg(500)->Arg(2000)->Arg(8000)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+
+void BM_ForceLp(benchmark::State& state) {
+  const int N = static_cast<int>(state.range(0));
+  const Packing& p = scene(N);
+  const std::vector<int> contacts = probed_contacts(p);
+  const EquilibriumSystem sys = build_equilibrium_system(p);
+  std::vector<int> column(p.contacts.size(), -1);
+  for (int k = 0; k < sys.num_contacts(); ++k) column[sys.contacts[k]] = k;
+  ForceLP lp(sys);
+  std::vector<double> lo, hi;
+  for (auto _ : state) {
+    lo.clear();
+    hi.clear();
+    for (const int k : contacts) {
+      lo.push_back(lp.min_fn(column[k]));
+      hi.push_back(lp.max_fn(column[k]));
+    }
+  }
+  const double tol = 1e-7 * p.force_unit();
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const double fn = p.contacts[contacts[i]].fn;
+    if (column[contacts[i]] < 0 || !(lo[i] <= fn + tol) || !(hi[i] >= fn - tol)) {
+      state.SkipWithError(("interval of contact " + std::to_string(contacts[i]) +
+                           " does not hold the packing's force").c_str());
+      return;
+    }
+  }
+  state.counters["lps"] = 2 * kProbes;
+  state.counters["s_per_lp"] =
+      benchmark::Counter(2 * kProbes, benchmark::Counter::kIsIterationInvariantRate |
+                                          benchmark::Counter::kInvert);
+  state.counters["rows"] = static_cast<double>(sys.A.rows());
+}
+BENCHMARK(BM_ForceLp)
+    ->ArgName("N")->Arg(500)->Arg(2000)->Arg(8000)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+
+}  // namespace
