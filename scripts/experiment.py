@@ -14,6 +14,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                (`unjam pack --from`) into OUT/fixed/N{N}-mu{mu}, probed the same way
                (the paper's Fig. 3b inset);
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
+  probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
+               --contact K`) and its displacement field drawn (plot_probe_field.py);
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json);
   figures      fig3-friction-sweep.png, fig2-profiles.png (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
@@ -276,6 +278,15 @@ def summary_row(d, mu, n, seed):
             "z": repr(float(s["z"])), "F_cont_over_F0": repr(float(s["F_cont_over_F0"])),
             "F_crit_over_F_cont": repr(float(s["F_crit_over_F_cont"])), "alpha": alpha,
             "alpha_err": aerr}
+
+
+def largest_force_contact(d):
+    """Row index in d/contacts.csv of the contact with the largest normal force fn."""
+    with open(os.path.join(d, "contacts.csv")) as f:
+        fn = [float(r["fn"]) for r in csv.DictReader(f)]
+    if not fn:
+        raise StageError(f"{d}/contacts.csv has no contact")
+    return max(range(len(fn)), key=lambda k: fn[k])
 
 
 def write_table(path, rows):
@@ -587,9 +598,30 @@ def build(args, cfg, R):
         R, "plot fig1", [fig1f, fig1p],
         [[PY, os.path.join(SCRIPTS, "plot_response_field.py"), d1, "--out", fig1f],
          [PY, os.path.join(SCRIPTS, "plot_packing.py"), d1, "--out", fig1p]], [name1]))
+    # One probe's own displacement field: the contact of largest normal force of that packing.
+    one_dir = os.path.join(out, "probe-one")
+    fig_one = os.path.join(out, "fig-probe-field.png")
+    one_params = {"command": ["unjam", "probe", os.path.relpath(d1, out), "--contact",
+                              "(largest fn)", "--method", "lp", "--g", repr(args.probe_g)],
+                  "plot": "plot_probe_field.py", "version": R.version}
+
+    def run_one(st):
+        k = largest_force_contact(d1)
+        if os.path.exists(fig_one):
+            os.remove(fig_one)
+        R.call(st, R.unjam_cmd("probe", d1, "--contact", k, "--method", "lp",
+                               "--g", repr(args.probe_g), "--out", one_dir, "--quiet"))
+        R.call(st, [PY, os.path.join(SCRIPTS, "plot_probe_field.py"), one_dir, "--contact", k,
+                    "--packing", d1, "--out", fig_one])
+    stages.append(Stage("probe one", f"unjam probe {os.path.relpath(d1, out)} --contact K, "
+                        f"{os.path.relpath(fig_one, out)}", os.path.join(out, "stage.json"),
+                        one_params, run_one, lambda: nonempty(fig_one),
+                        [name1.replace("probe ", "pack ", 1)]))
     figures = [(f"Fig. 1: mean displacement field, N = {nmax}, mu = {fmt_mu(mu1)}", fig1f),
                (f"Fig. 1: the packing and its force chains, N = {nmax}, mu = {fmt_mu(mu1)}",
                 fig1p),
+               (f"One probe's displacement field (the contact of largest force), N = {nmax}, "
+                f"mu = {fmt_mu(mu1)}", fig_one),
                (f"Fig. 2: d(r) per mu, N = {nmax}", fig2),
                *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
                ("Fig. 3: friction sweep (with the fixed-packing inset)", fig3),

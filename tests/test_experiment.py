@@ -58,7 +58,7 @@ class ExperimentTiny(unittest.TestCase):
         o = self.out
         expected = ["sweep.csv", "fixed.csv", "report.md", "stage.json",
                     "fig1-field.png", "fig1-packing.png", "fig2-profiles.png",
-                    "fig3-friction-sweep.png", "fig4-ensemble.png",
+                    "fig3-friction-sweep.png", "fig4-ensemble.png", "fig-probe-field.png",
                     "fig4/N50-mu0.1-s3/ensemble.json", "fig4/N50-mu0.1-s3/stage.json"]
         for mu in ("0", "0.1", "1"):
             d = f"packings/N100-mu{mu}-s1"
@@ -75,7 +75,7 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(o, "fixed.csv")) as f:
             self.assertEqual(len(list(csv.DictReader(f))), 3)
         self.assertEqual(set(outcomes(self.first).values()), {"ran"})
-        self.assertEqual(len(outcomes(self.first)), 18)
+        self.assertEqual(len(outcomes(self.first)), 19)
 
     def test_2_report_matches_table(self):
         with open(os.path.join(self.out, "sweep.csv")) as f:
@@ -104,7 +104,7 @@ class ExperimentTiny(unittest.TestCase):
 
     def test_3_rerun_skips_everything(self):
         res = outcomes(run(self.out))
-        self.assertEqual(len(res), 18)
+        self.assertEqual(len(res), 19)
         self.assertEqual({k for k, v in res.items() if v != "cached"}, set())
 
     def test_4_changed_parameter_reruns_dependent_stages_only(self):
@@ -112,9 +112,9 @@ class ExperimentTiny(unittest.TestCase):
         ran = {k for k, v in res.items() if v == "ran"}
         expected = {"probe N100-mu0-s1", "probe N100-mu0.1-s1", "probe N100-mu1-s1",
                     "probe fixed N100-mu0.1", "probe fixed N100-mu1", "table sweep",
-                    "table fixed", "plot fig3", "plot fig2", "plot fig1"}
+                    "table fixed", "plot fig3", "plot fig2", "plot fig1", "probe one"}
         self.assertEqual(ran, expected)
-        self.assertEqual(len(res), 18)     # the packs, the ensemble and Fig. 4 were cached
+        self.assertEqual(len(res), 19)     # the packs, the ensemble and Fig. 4 were cached
         with open(os.path.join(self.out, "packings/N100-mu0.1-s1/probe_summary.json")) as f:
             self.assertIn('"g": 2e-09', f.read())
 
@@ -142,7 +142,7 @@ class ExperimentTiny(unittest.TestCase):
         res = outcomes(run(self.out, "--probe-g", "2e-9"))
         ran = {k for k, v in res.items() if v == "ran"}
         self.assertEqual(ran, {"pack N100-mu1-s1", "probe N100-mu1-s1", "table sweep",
-                               "plot fig3", "plot fig2", "plot fig1"})
+                               "plot fig3", "plot fig2", "plot fig1", "probe one"})
         with open(os.path.join(self.out, "logs", "pack_N100-mu1-s1.log")) as f:
             self.assertIn("pack --resume", f.read())
         with open(os.path.join(d, "particles.csv")) as f:
