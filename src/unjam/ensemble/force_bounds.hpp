@@ -48,7 +48,7 @@ enum class LpMethod { barrier, simplex };
 // Copyable: each copy owns its own CLP models and bases (one per thread).
 class ForceLP {
  public:
-  // Builds the model and finds a first admissible network (dual simplex). Throws
+  // Builds the model and finds a first admissible network (barrier, or dual simplex). Throws
   // unjam::Error ("no admissible force network: ...") when the set is empty.
   // `tolerance`: CLP's primal and dual feasibility tolerance (absolute, on the scaled model).
   explicit ForceLP(const EquilibriumSystem& system, LpMethod method = LpMethod::barrier,
