@@ -12,7 +12,6 @@
 #include <omp.h>
 
 #include <chrono>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -29,16 +28,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kMu = 0.1;
 constexpr int kProbes = 8;  // contacts per benchmark, spread evenly over the contact list
 
-const Packing& scene(int N) {
-  static std::map<int, Packing> cache;
-  auto it = cache.find(N);
-  if (it == cache.end()) {
-    omp_set_num_threads(1);
-    it = cache.emplace(N, bench::static_packing(N, kMu, 1)).first;
-  }
-  return it->second;
-}
-
 // kProbes force-carrying contacts (fn > 0.1 F0), evenly spaced in the contact list.
 std::vector<int> probed_contacts(const Packing& p) {
   std::vector<int> loaded;
@@ -50,14 +39,9 @@ std::vector<int> probed_contacts(const Packing& p) {
   return picked;
 }
 
-double opening(const Packing& p, const ProbeResult& r, int k) {
-  const Contact& c = p.contacts[k];
-  return (r.u[c.b] - r.u[c.a]).dot(c.n) + r.lambda_dt * c.l.norm();
-}
-
 void BM_KinematicProbe(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
-  const Packing& p = scene(N);
+  const Packing& p = bench::static_scene(N, kMu);
   const std::vector<int> contacts = probed_contacts(p);
   omp_set_num_threads(1);
   const auto t0 = Clock::now();
@@ -70,7 +54,7 @@ void BM_KinematicProbe(benchmark::State& state) {
   }
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const ProbeResult& r = results[i];
-    const double open = opening(p, r, contacts[i]) / r.g;
+    const double open = contact_opening(p, r, contacts[i]) / r.g;
     if (!(r.f_crit >= r.f_cont * (1.0 - 1e-6)) || r.violations != 0 || !(std::abs(open - 1.0) < 0.1)) {
       state.SkipWithError(("probe of contact " + std::to_string(contacts[i]) + " fails its check")
                               .c_str());
@@ -92,7 +76,7 @@ BENCHMARK(BM_KinematicProbe)
 
 void BM_ForceLp(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
-  const Packing& p = scene(N);
+  const Packing& p = bench::static_scene(N, kMu);
   const std::vector<int> contacts = probed_contacts(p);
   const EquilibriumSystem sys = build_equilibrium_system(p);
   std::vector<int> column(p.contacts.size(), -1);

@@ -61,33 +61,12 @@ double process_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// Runs f with one OpenMP thread (scene building and references: the results do not depend
-// on the thread count, and one thread is never slowed down by a busy machine's scheduling
-// of the other thread), then restores the thread count.
-template <class F>
-auto with_one_thread(F&& f) {
-  struct Restore {
-    int n;
-    ~Restore() { omp_set_num_threads(n); }
-  } restore{omp_get_max_threads()};
-  omp_set_num_threads(1);
-  return f();
-}
-
-// Scenes are built (or loaded from the disk cache) once per process.
-const Packing& static_scene(int N, std::uint64_t seed = 1) {
-  static std::map<std::pair<int, std::uint64_t>, Packing> cache;
-  auto it = cache.find({N, seed});
-  if (it == cache.end())
-    it = cache.emplace(std::pair{N, seed}, with_one_thread([&] { return bench::static_packing(N, kMu, seed); })).first;
-  return it->second;
-}
-
+// Scenes are built once per process.
 const Packing& compressing_scene(int N) {
   static std::map<int, Packing> cache;
   auto it = cache.find(N);
   if (it == cache.end())
-    it = cache.emplace(N, with_one_thread([&] { return bench::compressing(N, 1, kCompressPhi); })).first;
+    it = cache.emplace(N, bench::with_one_thread([&] { return bench::compressing(N, 1, kCompressPhi); })).first;
   return it->second;
 }
 
@@ -158,7 +137,7 @@ const KernelReference& kernel_reference(int N, int sweeps) {
   if (it != cache.end()) return it->second;
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
-  const Packing& p = static_scene(N);
+  const Packing& p = bench::static_scene(N, kMu);
   KernelReference ref;
   const KernelOutput f = run_kernel(kernel_input(p, sweeps));
   if (sweeps >= 4) {
@@ -178,7 +157,7 @@ void kernel_benchmark(benchmark::State& state, int sweeps) {
   const int threads = static_cast<int>(state.range(1));
   const Packing* p = nullptr;
   try {
-    p = &static_scene(N);
+    p = &bench::static_scene(N, kMu);
   } catch (const Error& e) {
     state.SkipWithError(e.what());
     return;
@@ -346,7 +325,7 @@ std::size_t brute_force_pair_count(const Packing& p, double max_gap) {
 
 void BM_DetectContacts(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
-  const Packing& p = static_scene(N);
+  const Packing& p = bench::static_scene(N, kMu);
   const double max_gap = DynamicsSettings{}.min_detection;
   const std::size_t expected = brute_force_pair_count(p, max_gap);
   Contacts found;
@@ -370,7 +349,7 @@ void BM_StaticSweeps(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
   const auto seed = static_cast<std::uint64_t>(state.range(1));
   const double tol = std::pow(10.0, -static_cast<double>(state.range(2)));
-  const Packing& scene = static_scene(N, seed);
+  const Packing& scene = bench::static_scene(N, kMu, seed);
   omp_set_num_threads(1);  // the sweep count does not depend on the thread count
   StaticSolveSettings ss;
   ss.tol = tol;
@@ -413,7 +392,7 @@ BENCHMARK(BM_StaticSweeps)
 void BM_StaticScene(benchmark::State& state) {
   const int N = static_cast<int>(state.range(0));
   const auto seed = static_cast<std::uint64_t>(state.range(1));
-  const Packing& p = static_scene(N, seed);
+  const Packing& p = bench::static_scene(N, kMu, seed);
   PackingStats st;
   std::string why;
   for (auto _ : state) why = bench::verify_static(p, N, kMu, seed, &st);

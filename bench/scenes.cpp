@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
+#include <tuple>
 #include <sstream>
 
 #include "unjam/core/error.hpp"
@@ -98,6 +100,16 @@ Packing compressing(int N, std::uint64_t seed, double phi_target) {
 double L_over_d_squared(const Packing& p) {
   const double L_over_d = std::sqrt(p.cell.area()) / (2.0 * p.mean_radius());
   return L_over_d * L_over_d;
+}
+
+const Packing& static_scene(int N, double mu, std::uint64_t seed) {
+  static std::map<std::tuple<int, double, std::uint64_t>, Packing> cache;
+  auto it = cache.find({N, mu, seed});
+  if (it == cache.end())
+    it = cache.emplace(std::tuple{N, mu, seed},
+                       with_one_thread([&] { return static_packing(N, mu, seed); }))
+             .first;
+  return it->second;
 }
 
 }  // namespace unjam::bench

@@ -21,6 +21,8 @@
 #include <filesystem>
 #include <string>
 
+#include <omp.h>
+
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/packing/packing.hpp"
 
@@ -37,6 +39,23 @@ Packing gas(int N, std::uint64_t seed);
 // Static packing (cached). Throws unjam::Error if the compaction does not reach a static
 // packing or the result fails verify_static.
 Packing static_packing(int N, double mu, std::uint64_t seed);
+
+// static_packing built (or loaded) once per process, with one OpenMP thread; the same
+// reference for every benchmark that asks for it.
+const Packing& static_scene(int N, double mu, std::uint64_t seed = 1);
+
+// Runs f with one OpenMP thread (scene building and references: the results do not depend
+// on the thread count, and one thread is never slowed down by a busy machine's scheduling
+// of the other thread), then restores the thread count.
+template <class F>
+auto with_one_thread(F&& f) {
+  struct Restore {
+    int n;
+    ~Restore() { omp_set_num_threads(n); }
+  } restore{omp_get_max_threads()};
+  omp_set_num_threads(1);
+  return f();
+}
 
 // The gas (mu = 0.1) advanced by the compaction dynamics (default CompactionSettings) until
 // phi >= phi_target (not cached: cheap). Throws unjam::Error if not reached in 10^6 steps.

@@ -50,12 +50,6 @@ double lp_max(const Packing& p, int contact) {
   return NAN;
 }
 
-// Relative normal displacement of contact k in a probe: (u_b - u_a) . n + lambda dt |l|.
-double opening(const Packing& p, const ProbeResult& r, int k) {
-  const Contact& c = p.contacts[k];
-  return (r.u[c.b] - r.u[c.a]).dot(c.n) + r.lambda_dt * c.l.norm();
-}
-
 TEST(Probe, FrictionlessCriticalForceEqualsTheContactForce) {
   // mu = 0: the admissible network is unique, so F_crit = F_cont. The NLGS probe exceeds it
   // by the inertia of the moving grains, c / dt^2 with c ~ m g: halving dt must quadruple
@@ -95,9 +89,9 @@ TEST(Probe, CriticalForceReachesButNeverExceedsTheLpMaximum) {
     EXPECT_GE(r.f_crit, 0.98 * fn_max) << "contact " << k;
     EXPECT_GT(r.f_crit, 1.3 * r.f_cont) << "friction makes contacts stronger than their force";
     // The probed pair opens by g; no touching pair closes beyond the tolerance.
-    EXPECT_NEAR(opening(p, r, k) / r.g, 1.0, 1e-6);
+    EXPECT_NEAR(contact_opening(p, r, k) / r.g, 1.0, 1e-6);
     for (int j = 0; j < static_cast<int>(p.contacts.size()); ++j)
-      if (j != k && p.contacts[j].gap < 1e-6) EXPECT_GT(opening(p, r, j), -1e-3 * r.g) << "contact " << j;
+      if (j != k && p.contacts[j].gap < 1e-6) EXPECT_GT(contact_opening(p, r, j), -1e-3 * r.g) << "contact " << j;
   }
 }
 
@@ -127,7 +121,7 @@ TEST(Probe, KinematicProbeMatchesTheLpAndOpensTheContact) {
     const ProbeResult r = fast.probe(k);
     EXPECT_NEAR(r.f_crit, lp_max(p, k), 1e-7 * p.force_unit());
     EXPECT_EQ(r.violations, 0);
-    EXPECT_NEAR(opening(p, r, k) / r.g, 1.0, 0.1);  // residual of the kinematic field
+    EXPECT_NEAR(contact_opening(p, r, k) / r.g, 1.0, 0.1);  // residual of the kinematic field
   }
 }
 

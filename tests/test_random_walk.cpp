@@ -24,31 +24,22 @@ using unjam::testing::p50;
 
 TEST(RandomWalk, EverySampleIsAdmissible) {
   const auto& d = p50();
-  const double F0 = d.packing.force_unit(), tol = 1e-9 * F0, mu = d.sys.mu;
-  const int p_row = d.sys.pressure_row();
-  double worst_balance = 0.0, worst_pressure = 0.0, worst_fn = 0.0, worst_coulomb = 0.0;
+  const double F0 = d.packing.force_unit(), tol = 1e-9 * F0;
+  unjam::testing::WorstViolation worst{d.sys};
   unjam::RandomWalkOptions options;
   options.samples = 300;
-  options.on_sample = [&](const unjam::ForceNetwork& net) {
-    for (Eigen::Index k = 0; k < net.fn.size(); ++k) {
-      worst_fn = std::min(worst_fn, net.fn[k]);
-      worst_coulomb = std::max(worst_coulomb, std::abs(net.ft[k]) - mu * net.fn[k]);
-    }
-    const Eigen::VectorXd r = d.sys.A * unjam::testing::stacked(net) - d.sys.rhs;
-    worst_balance = std::max(worst_balance, r.head(p_row).cwiseAbs().maxCoeff());
-    worst_pressure = std::max(worst_pressure, std::abs(r[p_row]) / d.sys.rhs[p_row]);
-  };
+  options.on_sample = [&](const unjam::ForceNetwork& net) { worst.add(net); };
   const auto result = unjam::sample_random_walk(d.packing, d.sys, options);
   std::printf("[ walk ] p50: %d samples, %d failures, %lld sweeps, eta %.4g; worst balance "
               "%.3g F0, pressure %.3g, fn %.3g F0, Coulomb %.3g F0\n",
-              result.samples, result.failures, result.sweeps, result.eta, worst_balance / F0,
-              worst_pressure, worst_fn / F0, worst_coulomb / F0);
+              result.samples, result.failures, result.sweeps, result.eta, worst.balance / F0,
+              worst.pressure, worst.fn / F0, worst.coulomb / F0);
   EXPECT_EQ(result.samples + result.failures, 300);
   EXPECT_GE(result.samples, 295);
-  EXPECT_LT(worst_balance, tol);
-  EXPECT_LT(worst_pressure, 1e-9);
-  EXPECT_GE(worst_fn, -tol);
-  EXPECT_LE(worst_coulomb, tol);
+  EXPECT_LT(worst.balance, tol);
+  EXPECT_LT(worst.pressure, 1e-9);
+  EXPECT_GE(worst.fn, -tol);
+  EXPECT_LE(worst.coulomb, tol);
   EXPECT_GT(result.eta, 0.0);
   double mean_fn = 0.0;  // kick amplitude: <F_n> of the packing's network over the set
   for (const int c : d.sys.contacts) mean_fn += d.packing.contacts[c].fn;

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "unjam/core/vec2.hpp"
+#include "unjam/packing/packing.hpp"
 
 namespace unjam {
 
@@ -22,5 +23,10 @@ struct ProbeResult {
   double residual = 0.0;
   int violations = 0;          // lp: unilateral conditions its field still breaks
 };
+
+// Normal opening of packing.contacts[k] over the probe: (u_b - u_a) . n + lambda dt |l|
+// (the cell's affine strain stretches the branch vector l; length units). The probed pair
+// must open by g, a touching pair must not go below zero.
+double contact_opening(const Packing& packing, const ProbeResult& r, int k);
 
 }  // namespace unjam
