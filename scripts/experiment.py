@@ -238,7 +238,8 @@ def pack_stage(R, name, d, pack_args, deps=()):
 
 def probe_stage(R, name, d, g, sample, dep):
     """`unjam probe --all`, or `--sample K` (seeded, K per packing) when sample > 0."""
-    args = (["--sample", str(sample)] if sample else ["--all"]) + ["--method", "lp", "--g", repr(g)]
+    select = ["--sample", str(sample)] if sample else ["--all"]
+    args = select + ["--method", "lp", "--g", repr(g)]
     params = {"command": ["unjam", "probe", d] + args, "version": R.version}
 
     def run(st):
@@ -248,7 +249,7 @@ def probe_stage(R, name, d, g, sample, dep):
                 if os.path.exists(p):
                     os.remove(p)
         R.call(st, R.unjam_cmd("probe", d, *args, "--quiet"))
-    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(args[:2 if sample else 1])}",
+    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
 
 

@@ -187,8 +187,7 @@ long long for_each_lp(const ForceLP& base, const std::vector<int>& todo, int thr
   const int n = static_cast<int>(todo.size());
 #pragma omp parallel num_threads(std::max(1, std::min(threads, n)))
   {
-    ForceLP lp(base);  // own model and basis
-    const long long before = lp.iterations();
+    ForceLP lp(base);  // own model and basis; a copy counts its own iterations from 0
 #pragma omp for schedule(dynamic, 16)
     for (int i = 0; i < n; ++i) {
       bool failed = false;
@@ -208,7 +207,7 @@ long long for_each_lp(const ForceLP& base, const std::vector<int>& todo, int thr
       const int n_done = ++done;
       if (options.progress && omp_get_thread_num() == 0) options.progress(n_done, total);
     }
-    iterations += lp.iterations() - before;
+    iterations += lp.iterations();
   }
   if (any_error) throw Error(error);
   return iterations;
@@ -260,16 +259,15 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   std::vector<int> todo = in_doubt();
   {
     ForceLP lp(base);
-    const long long before = lp.iterations();
     for (int round = 0; round < kGroupRounds && !todo.empty(); ++round) {
       lp.min_sum_fn(todo);
       bounds.fn_min = bounds.fn_min.cwiseMin(lp.network().fn);
-      const std::size_t before = todo.size();
+      const std::size_t doubted = todo.size();
       todo = in_doubt();
       ++bounds.group_lps;
-      if (20 * (before - todo.size()) < before) break;  // opened < 5 %: not worth another
+      if (20 * (doubted - todo.size()) < doubted) break;  // opened < 5 %: not worth another
     }
-    iterations += lp.iterations() - before;
+    iterations += lp.iterations();
   }
   for (int k = 0; k < Nc; ++k)
     if (bounds.fn_min[k] <= open_tol) bounds.fn_min[k] = 0.0;

@@ -66,7 +66,8 @@ class ForceLP {
   // The optimal network of the last solve (an argmin / argmax of the last objective).
   ForceNetwork network() const;
 
-  // Simplex and barrier iterations summed over every solve of this object.
+  // Simplex and barrier iterations summed over every solve of this object (a copy starts
+  // from 0).
   long long iterations() const { return iterations_; }
 
  private:
