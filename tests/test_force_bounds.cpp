@@ -139,6 +139,25 @@ TEST(ForceBounds, MinimaCertifiedByArgmaxNetworksEqualTheirOwnLp) {
   EXPECT_GE(zeros, bounds.min_lps_skipped);
 }
 
+TEST(ForceBounds, SharedCholeskyAnalysisGivesTheFreshOptimum) {
+  // One ForceLP re-solves LP after LP with the Cholesky analysis of its first solve (and a
+  // copy carries it to another thread); each optimum must equal that of a ForceLP built
+  // for that LP alone, whose analysis is its own. Min and max alternate so that rows
+  // dropped by one factorisation sequence cannot leak into the next.
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const double F0 = p.force_unit();
+  unjam::ForceLP shared(sys);
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    const double shared_max = shared.max_fn(k), shared_min = shared.min_fn(k);
+    EXPECT_NEAR(shared_max, unjam::ForceLP(sys).max_fn(k), 1e-9 * F0) << "contact " << k;
+    EXPECT_NEAR(shared_min, unjam::ForceLP(sys).min_fn(k), 1e-9 * F0) << "contact " << k;
+    EXPECT_LE(shared_min, shared_max + 1e-9 * F0) << "contact " << k;
+  }
+  unjam::ForceLP copy(shared);
+  EXPECT_NEAR(copy.max_fn(0), unjam::ForceLP(sys).max_fn(0), 1e-9 * F0);
+}
+
 TEST(ForceBounds, PackingNetworkLiesInsideEveryInterval) {
   for (const char* name : {"p50-mu0.1", "lattice16"}) {
     const Packing p = unjam::read_packing(fixture_dir(name));

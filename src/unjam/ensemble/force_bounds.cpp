@@ -7,7 +7,6 @@
 #include <string>
 
 #include <coin/ClpSimplex.hpp>
-#include <coin/ClpSolve.hpp>
 #include <omp.h>
 
 #include "unjam/core/error.hpp"
@@ -39,15 +38,6 @@ std::string clp_status_text(int status) {
   }
 }
 
-// CLP's interior-point method from scratch, no crossover, no presolve.
-void solve_by_barrier(ClpSimplex& model) {
-  ClpSolve options;
-  options.setSolveType(ClpSolve::useBarrierNoCross);
-  options.setPresolveType(ClpSolve::presolveOff);
-  options.setSpecialOption(2, 1);  // no interrupt handler: thread safe
-  model.initialSolve(options);
-}
-
 }  // namespace
 
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
@@ -76,7 +66,7 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
   // fails, dual simplex decides, which classifies an empty set reliably.
   bool admissible = false;
   if (method == LpMethod::barrier) {
-    solve_by_barrier(model);
+    barrier_.solve(model);
     iterations_ += model.numberIterations();
     const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), cols);
     admissible = model.status() == 0 && y.minCoeff() >= -tolerance &&
@@ -103,6 +93,7 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
 ForceLP::ForceLP(const ForceLP& other)
     : system_(other.system_),
       method_(other.method_),
+      barrier_(other.barrier_),
       min_model_(std::make_unique<ClpSimplex>(*other.min_model_)),
       max_model_(other.max_model_ ? std::make_unique<ClpSimplex>(*other.max_model_) : nullptr),
       last_(min_model_.get()),
@@ -133,7 +124,7 @@ double ForceLP::optimize(const std::vector<int>& ks, double direction) {
   }
   model.setOptimizationDirection(direction);  // +1 minimise, -1 maximise
   if (method_ == LpMethod::barrier) {
-    solve_by_barrier(model);
+    barrier_.solve(model);
     iterations_ += model.numberIterations();
     if (model.status() != 0) {  // rare barrier failure: finish by simplex
       model.primal();

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/ensemble/lp_barrier.hpp"
 
 class ClpSimplex;
 
@@ -33,9 +34,10 @@ enum class ContactState { closed, sliding, open };
 std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol);
 
 // How each LP is solved (timings in docs/ensemble.md):
-//   barrier  CLP's interior-point method without crossover, every LP from scratch. Its cost
-//            grows like one sparse Cholesky per iteration; the fastest at every size
-//            measured. The optimal network it returns lies inside the optimal face.
+//   barrier  CLP's interior-point method without crossover, every LP from scratch with one
+//            shared symbolic analysis (lp_barrier.hpp). Its cost grows like one sparse
+//            Cholesky per iteration; the fastest at every size measured. The optimal network
+//            it returns lies inside the optimal face.
 //   simplex  primal simplex warm-started from the previous optimal basis (one model for the
 //            minima, one for the maxima; dual simplex measured no faster: CLP falls back to
 //            primal because a changed objective leaves the basis dual infeasible). The
@@ -75,6 +77,7 @@ class ForceLP {
 
   const EquilibriumSystem* system_;
   LpMethod method_;
+  BarrierSolver barrier_;  // keeps the Cholesky analysis of A_y across solves
   std::unique_ptr<ClpSimplex> min_model_, max_model_;  // the same LP, one basis per sense
   ClpSimplex* last_ = nullptr;                         // model of the last solve
   int per_contact_;  // cone columns per contact (2 if mu > 0, else 1)
