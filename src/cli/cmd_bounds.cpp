@@ -103,7 +103,6 @@ void run_bounds(const BoundsOptions& opt) {
        {{"gap_tol", opt.gap_tol}, {"fn_tol_F0", opt.fn_tol}, {"threads", lp.threads},
         {"method", opt.method}, {"lp_tolerance", lp.tolerance}}},
       {"min_lps_skipped", bounds.min_lps_skipped},
-      {"group_lps", bounds.group_lps},
       {"iterations", bounds.iterations},
       {"timings_s",
        {{"read_and_build", t_build}, {"rank", rank_seconds}, {"lp", bounds.seconds},
@@ -116,8 +115,7 @@ void run_bounds(const BoundsOptions& opt) {
   std::printf("dimension          %d (cone columns %d, rank %d)\n", rank.dimension, rank.columns,
               rank.rank);
   std::printf("mean width / <fn>  %.6g\n", width_over_fn);
-  std::printf("fn_min = 0 without own LP  %d contacts (%d group LPs)\n", bounds.min_lps_skipped,
-              bounds.group_lps);
+  std::printf("fn_min = 0 without own LP  %d contacts\n", bounds.min_lps_skipped);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
   std::printf("wrote              %s, %s\n", csv_path.string().c_str(), json_path.string().c_str());

@@ -103,24 +103,20 @@ ForceLP::ForceLP(const ForceLP& other)
 
 ForceLP::~ForceLP() = default;
 
-double ForceLP::optimize(const std::vector<int>& ks, double direction) {
-  for (const int k : ks)
-    if (k < 0 || k >= system_->num_contacts())
-      throw Error("force bounds LP: contact " + std::to_string(k) + " out of range");
+double ForceLP::optimize(int k, double direction) {
+  if (k < 0 || k >= system_->num_contacts())
+    throw Error("force bounds LP: contact " + std::to_string(k) + " out of range");
   // The barrier needs no basis: one model serves both senses.
   const bool use_max_model = method_ == LpMethod::simplex && direction < 0.0;
   ClpSimplex& model = use_max_model ? *max_model_ : *min_model_;
-  std::vector<int>& objective = use_max_model ? max_objective_ : min_objective_;
-  if (ks != objective) {
-    // Objective sum of fn_k: (y_2k + y_2k+1) / 2 for mu > 0, y_k for mu = 0.
-    const double weight = 1.0 / per_contact_;
-    for (const int k : objective)
-      for (int j = 0; j < per_contact_; ++j)
-        model.setObjectiveCoefficient(per_contact_ * k + j, 0.0);
-    for (const int k : ks)
-      for (int j = 0; j < per_contact_; ++j)
-        model.setObjectiveCoefficient(per_contact_ * k + j, weight);
-    objective = ks;
+  int& objective = use_max_model ? max_objective_ : min_objective_;
+  if (k != objective) {
+    // Objective fn_k: (y_2k + y_2k+1) / 2 for mu > 0, y_k for mu = 0.
+    for (int j = 0; j < per_contact_; ++j) {
+      if (objective >= 0) model.setObjectiveCoefficient(per_contact_ * objective + j, 0.0);
+      model.setObjectiveCoefficient(per_contact_ * k + j, 1.0 / per_contact_);
+    }
+    objective = k;
   }
   model.setOptimizationDirection(direction);  // +1 minimise, -1 maximise
   if (method_ == LpMethod::barrier) {
@@ -135,20 +131,16 @@ double ForceLP::optimize(const std::vector<int>& ks, double direction) {
     iterations_ += model.numberIterations();
   }
   if (model.status() != 0)
-    throw Error("force bounds LP: " + std::string(direction > 0 ? "min" : "max") + " of fn of " +
-                (ks.size() == 1 ? "contact " + std::to_string(ks[0])
-                                : std::to_string(ks.size()) + " contacts") +
-                " " + clp_status_text(model.status()));
+    throw Error("force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
+                " of fn of contact " + std::to_string(k) + " " +
+                clp_status_text(model.status()));
   last_ = &model;
   const double* y = model.primalColumnSolution();
-  double sum = 0.0;
-  for (const int k : ks) sum += per_contact_ == 2 ? 0.5 * (y[2 * k] + y[2 * k + 1]) : y[k];
-  return sum;
+  return per_contact_ == 2 ? 0.5 * (y[2 * k] + y[2 * k + 1]) : y[k];
 }
 
-double ForceLP::min_fn(int k) { return optimize({k}, 1.0); }
-double ForceLP::max_fn(int k) { return optimize({k}, -1.0); }
-double ForceLP::min_sum_fn(const std::vector<int>& ks) { return optimize(ks, 1.0); }
+double ForceLP::min_fn(int k) { return optimize(k, 1.0); }
+double ForceLP::max_fn(int k) { return optimize(k, -1.0); }
 
 ForceNetwork ForceLP::network() const {
   const int cols = last_->numberColumns();
@@ -159,10 +151,6 @@ ForceNetwork ForceLP::network() const {
 }
 
 namespace {
-
-// Rounds of the group step of compute_force_bounds (min of the summed fn of the contacts in
-// doubt); it stops earlier once a round opens fewer than 5 % of them.
-constexpr int kGroupRounds = 8;
 
 // Runs solve(lp, k) for every k of `todo` on `threads` threads, one ForceLP copy each, in
 // contiguous chunks (neighbouring contacts share grains: for the simplex the previous optimum
@@ -237,32 +225,16 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   });
   for (const Eigen::VectorXd& seen : seen_min) bounds.fn_min = bounds.fn_min.cwiseMin(seen);
 
-  // Phase 2: a contact open (fn <= open_tol) in an admissible network can open: fn_min = 0
-  // without an LP of its own. First the argmax networks of phase 1; then, a few times, the
-  // network of least total force on the contacts still in doubt, which opens at once as
-  // many of them as can open together (one LP each round, while it pays).
-  const auto in_doubt = [&] {
-    std::vector<int> todo;
-    for (int k = 0; k < Nc; ++k)
-      if (bounds.fn_min[k] > open_tol) todo.push_back(k);
-    return todo;
-  };
-  std::vector<int> todo = in_doubt();
-  {
-    ForceLP lp(base);
-    for (int round = 0; round < kGroupRounds && !todo.empty(); ++round) {
-      lp.min_sum_fn(todo);
-      bounds.fn_min = bounds.fn_min.cwiseMin(lp.network().fn);
-      const std::size_t doubted = todo.size();
-      todo = in_doubt();
-      ++bounds.group_lps;
-      if (20 * (doubted - todo.size()) < doubted) break;  // opened < 5 %: not worth another
-    }
-    iterations += lp.iterations();
+  // A contact open (fn <= open_tol) in an admissible network can open: fn_min = 0 without
+  // an LP of its own.
+  std::vector<int> todo;
+  for (int k = 0; k < Nc; ++k) {
+    if (bounds.fn_min[k] <= open_tol)
+      bounds.fn_min[k] = 0.0;
+    else
+      todo.push_back(k);
   }
-  for (int k = 0; k < Nc; ++k)
-    if (bounds.fn_min[k] <= open_tol) bounds.fn_min[k] = 0.0;
-  // Phase 3: the LP of every other contact. Each optimal network may open further contacts
+  // Phase 2: the LP of every other contact. Each optimal network may open further contacts
   // still queued; their LPs are skipped too (which ones depends on the order, the values
   // do not: a minimum at or below open_tol is reported as 0).
   std::vector<std::atomic<char>> opened(Nc);

@@ -62,8 +62,6 @@ class ForceLP {
   // min / max of fn_k over the admissible set (k: position in system.contacts).
   double min_fn(int k);
   double max_fn(int k);
-  // min of the sum of fn_k over the contacts ks (each at most once).
-  double min_sum_fn(const std::vector<int>& ks);
 
   // The optimal network of the last solve (an argmin / argmax of the last objective).
   ForceNetwork network() const;
@@ -73,7 +71,7 @@ class ForceLP {
   long long iterations() const { return iterations_; }
 
  private:
-  double optimize(const std::vector<int>& ks, double direction);
+  double optimize(int k, double direction);
 
   const EquilibriumSystem* system_;
   LpMethod method_;
@@ -81,8 +79,8 @@ class ForceLP {
   std::unique_ptr<ClpSimplex> min_model_, max_model_;  // the same LP, one basis per sense
   ClpSimplex* last_ = nullptr;                         // model of the last solve
   int per_contact_;  // cone columns per contact (2 if mu > 0, else 1)
-  // Contacts whose fn makes up each model's current objective.
-  std::vector<int> min_objective_, max_objective_;
+  // The contact whose fn is each model's current objective (-1: none, zero objective).
+  int min_objective_ = -1, max_objective_ = -1;
   long long iterations_ = 0;
 };
 
@@ -102,19 +100,17 @@ struct ForceBounds {
   Eigen::VectorXd fn_min, fn_max;            // per contact of the system
   std::vector<ForceNetwork> network_at_max;  // per contact, if keep_networks_at_max
   int min_lps_skipped = 0;  // minima certified 0 by another LP's network, without their own
-  int group_lps = 0;        // LPs of the group step (min of summed fn)
   long long iterations = 0;                  // solver iterations over all LPs
   double seconds = 0.0;                      // wall time of all LPs (model build included)
 };
 
 // Both ends of every contact's interval. Every optimal network is admissible, so a contact
 // it leaves open (fn <= open_tol) can open: fn_min = 0 with no LP of its own. Hence:
-//   1. fn_max of every contact (one LP each);
-//   2. the contacts opened by those argmax networks, then by a few networks of least summed
-//      fn over the contacts still in doubt (one LP each), get fn_min = 0;
-//   3. fn_min by LP for the rest, skipping any contact an earlier minimum's network opened.
+//   1. fn_max of every contact (one LP each); the contacts its argmax networks open get
+//      fn_min = 0;
+//   2. fn_min by LP for the rest, skipping any contact an earlier minimum's network opened.
 // On a 2000-disk mu = 0.1 packing about a third of the contacts can open, and this saves
-// nearly all of their min LPs (docs/ensemble.md).
+// 86 % of their min LPs (docs/ensemble.md).
 // With several threads the LPs are shared out in contiguous chunks; each LP optimum value is
 // unique, so results agree with one thread up to the solver tolerance.
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
