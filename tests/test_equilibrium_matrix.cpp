@@ -1,6 +1,9 @@
 // Balance rows of a fixed contact geometry: selection, shape, rank, the packing's own network.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/Dense>
 
 #include "unjam/core/error.hpp"
@@ -53,6 +56,48 @@ TEST(EquilibriumMatrix, RankAndDimensionMatchDenseLu) {
     EXPECT_EQ(info.rank, dense_rank(unjam::cone_matrix(sys))) << name;
     EXPECT_EQ(info.dimension, 2 * sys.num_contacts() - info.rank) << name;
   }
+}
+
+TEST(EquilibriumMatrix, RankOfSubsetsMatchesDenseLu) {
+  // Dropping contacts frees grains (mechanisms: a null space of A_y^T) or, once A_y is tall
+  // (more rows than cone columns, always at mu = 0 where the torque rows vanish), leaves
+  // the null space on the other side. Both sides must give the dense rank.
+  const Packing p = fixture("p50-mu0.1");
+  for (const int stride : {2, 3, 4, 5, 7}) {
+    std::vector<int> kept;
+    for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k)
+      if (k % stride != 0) kept.push_back(k);
+    for (const double mu : {0.1, 0.0}) {
+      Packing q = p;
+      q.meta.mu = mu;
+      const auto sys = unjam::build_equilibrium_system(q, kept);
+      const auto info = unjam::equilibrium_rank(sys);
+      EXPECT_EQ(info.rank, dense_rank(unjam::cone_matrix(sys))) << "stride " << stride << " mu " << mu;
+      EXPECT_EQ(info.dimension, info.columns - info.rank);
+    }
+  }
+}
+
+TEST(EquilibriumMatrix, RankCountsEverySingularValueBelowTheThreshold) {
+  // With a threshold in a gap of the spectrum, 18 singular values of lattice16 count as zero:
+  // more than the rank's first block of 8 holds, so it must widen its block until the count
+  // fits. The reference is the dense SVD of the same (tall) matrix with the same threshold.
+  const Packing p = fixture("lattice16");
+  const auto sys = unjam::build_equilibrium_system(p);
+  const Eigen::MatrixXd Ay(unjam::cone_matrix(sys));
+  const Eigen::MatrixXd B = Ay.rows() >= Ay.cols() ? Ay : Eigen::MatrixXd(Ay.transpose());
+  const double max_norm = B.colwise().norm().maxCoeff();
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(B).singularValues();  // descending
+  const int n = static_cast<int>(s.size());
+  // The widest gap s_(c) / s_(c-1) of the ascending spectrum with 5 <= c <= 40.
+  int c = 5;
+  for (int k = 5; k <= std::min(40, n - 1); ++k)
+    if (s[n - 1 - k] / s[n - k] > s[n - 1 - c] / s[n - c]) c = k;
+  ASSERT_GT(s[n - 1 - c] / s[n - c], 2.0) << "no clear gap";
+  const double threshold = std::sqrt(s[n - 1 - c] * s[n - c]) / max_norm;
+  const auto info = unjam::equilibrium_rank(sys, threshold);
+  EXPECT_GT(c, 8);
+  EXPECT_EQ(info.rank, n - c);
 }
 
 TEST(EquilibriumMatrix, ConeCoordinatesReproduceForces) {

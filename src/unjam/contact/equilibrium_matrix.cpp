@@ -1,10 +1,12 @@
 #include "unjam/contact/equilibrium_matrix.hpp"
 
 #include <algorithm>
+#include <random>
 #include <string>
 
+#include <Eigen/Dense>
 #include <Eigen/OrderingMethods>
-#include <Eigen/SparseQR>
+#include <Eigen/SparseCholesky>
 
 #include "unjam/core/error.hpp"
 
@@ -140,19 +142,43 @@ RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_thres
   info.rows = static_cast<int>(Ay.rows());
   info.columns = static_cast<int>(Ay.cols());
   info.threshold = relative_threshold;
-  // rank(A_y) = rank(A_y^T); factor whichever is tall (at least as many rows as columns),
-  // the shape SparseQR handles.
-  Eigen::SparseMatrix<double> tall = Ay.rows() >= Ay.cols()
-                                         ? Eigen::SparseMatrix<double>(Ay)
-                                         : Eigen::SparseMatrix<double>(Ay.transpose());
-  tall.makeCompressed();
+  // rank(A_y) = n - dim null(B), with B the tall one of A_y and A_y^T (n = its columns); the
+  // null space is small (periodic translations, a few mechanisms), so it is found directly.
+  const Eigen::SparseMatrix<double> B = Ay.rows() >= Ay.cols()
+                                            ? Eigen::SparseMatrix<double>(Ay)
+                                            : Eigen::SparseMatrix<double>(Ay.transpose());
+  const int n = static_cast<int>(B.cols());
   double max_norm = 0.0;
-  for (int j = 0; j < tall.cols(); ++j) max_norm = std::max(max_norm, tall.col(j).norm());
-  Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> qr;
-  qr.setPivotThreshold(relative_threshold * max_norm);
-  qr.compute(tall);
-  if (qr.info() != Eigen::Success) throw Error("equilibrium rows: sparse QR failed");
-  info.rank = static_cast<int>(qr.rank());
+  for (int j = 0; j < n; ++j) max_norm = std::max(max_norm, B.col(j).norm());
+  // Subspace inverse iteration on G = B^T B + delta I (sparse LDLT, AMD ordering): each solve
+  // multiplies a null direction of B by 1/delta and one with singular value s by
+  // 1/(s^2 + delta), so with delta = 1e-13 max G_ii a few solves leave the block spanning the
+  // null space and the smallest singular directions. The count is then made on B itself:
+  // the singular values of B V (V orthonormal), those <= relative_threshold * max_norm are
+  // null. Squaring enters only the iteration, not the decision.
+  Eigen::SparseMatrix<double> G = B.transpose() * B;
+  const double delta = 1e-13 * G.diagonal().maxCoeff();
+  for (int j = 0; j < n; ++j) G.coeffRef(j, j) += delta;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt(G);
+  if (ldlt.info() != Eigen::Success) throw Error("equilibrium rows: rank factorisation failed");
+  constexpr int kSolves = 4;
+  std::mt19937_64 rng(1);  // fixed: the rank does not depend on the run
+  std::normal_distribution<double> normal;
+  int nullity = 0;
+  for (int block = std::min(8, n);; block = std::min(2 * block, n)) {
+    Eigen::MatrixXd V(n, block);
+    for (double& v : V.reshaped()) v = normal(rng);
+    for (int i = 0; i < kSolves; ++i) {
+      V = ldlt.solve(V);
+      V = Eigen::HouseholderQR<Eigen::MatrixXd>(V).householderQ() * Eigen::MatrixXd::Identity(n, block);
+    }
+    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(B * V).singularValues();
+    nullity = static_cast<int>((s.array() <= relative_threshold * max_norm).count());
+    // Accept when at most half the block is null: the block then holds the null space with
+    // room for the next-smallest directions. Otherwise (or B is all null) a larger block.
+    if (2 * nullity <= block || block == n) break;
+  }
+  info.rank = n - nullity;
   info.dimension = info.columns - info.rank;
   return info;
 }
