@@ -170,7 +170,8 @@ RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_thres
     for (double& v : V.reshaped()) v = normal(rng);
     for (int i = 0; i < kSolves; ++i) {
       V = ldlt.solve(V);
-      V = Eigen::HouseholderQR<Eigen::MatrixXd>(V).householderQ() * Eigen::MatrixXd::Identity(n, block);
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(V);
+      V = qr.householderQ() * Eigen::MatrixXd::Identity(n, block);  // orthonormal basis
     }
     const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(B * V).singularValues();
     nullity = static_cast<int>((s.array() <= relative_threshold * max_norm).count());

@@ -160,11 +160,12 @@ template <class Solve>
 long long for_each_lp(const ForceLP& base, const std::vector<int>& todo, int threads,
                       std::atomic<int>& done, const ForceBoundsOptions& options, int total,
                       Solve solve) {
+  const int n = static_cast<int>(todo.size());
+  if (n == 0) return 0;  // no model copies for nothing to do
   std::atomic<long long> iterations{0};
   bool any_error = false;
   std::string error;
-  const int n = static_cast<int>(todo.size());
-#pragma omp parallel num_threads(std::max(1, std::min(threads, n)))
+#pragma omp parallel num_threads(std::min(threads, n))
   {
     ForceLP lp(base);  // own model and basis; a copy counts its own iterations from 0
 #pragma omp for schedule(dynamic, 16)

@@ -16,8 +16,9 @@ constexpr int kMaxBarrierIterations = 1000;
 
 // CLP's sparse Cholesky with the ordering and symbolic analysis done once. The first solve
 // runs CLP's own order() and symbolic() and hands a copy of the analysed state to `keep`;
-// a clone of that copy skips both (it only learns the new interior model and clears the rows
-// a previous factorisation dropped).
+// that copy, and every clone of it, skips both (it only learns the new interior model and
+// clears the rows a previous factorisation dropped). Only the first object writes to
+// `keep`; the analysed copies hold no pointer back to it.
 class SharedAnalysisCholesky : public ClpCholeskyBase {
  public:
   explicit SharedAnalysisCholesky(std::unique_ptr<ClpCholeskyBase>* keep) : keep_(keep) {
@@ -37,13 +38,15 @@ class SharedAnalysisCholesky : public ClpCholeskyBase {
     const int status = ClpCholeskyBase::symbolic();
     if (status == 0) {
       analysed_ = true;
-      keep_->reset(clone());
+      auto* analysed = new SharedAnalysisCholesky(*this);
+      analysed->keep_ = nullptr;
+      keep_->reset(analysed);
     }
     return status;
   }
 
  private:
-  std::unique_ptr<ClpCholeskyBase>* keep_;  // where the analysed state goes
+  std::unique_ptr<ClpCholeskyBase>* keep_;  // where the first analysis goes (null after)
   bool analysed_ = false;
 };
 
