@@ -158,6 +158,31 @@ TEST(ForceBounds, SharedCholeskyAnalysisGivesTheFreshOptimum) {
   EXPECT_NEAR(copy.max_fn(0), unjam::ForceLP(sys).max_fn(0), 1e-9 * F0);
 }
 
+TEST(ForceBounds, StalledBarrierIsSolvedAgainAtLooserTolerance) {
+  // At 8000 disks about 1 barrier solve in 40 stalls just short of the 1e-9 gap; p50 does the
+  // same at a tolerance of 1e-13 (the maximum of contact 59). Each such LP must be solved
+  // again by the barrier at 10x / 100x the tolerance (not by the simplex fallback, minutes at
+  // 8000 disks), be counted and flagged, and end at the right maximum.
+  // (Only maxima: at 1e-13 CLP's barrier also ends some minima "optimal" at wrong points,
+  // which is why ForceLP's tolerance stays at 1e-9.)
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const auto ref = read_reference(fixture_dir("p50-mu0.1"));
+  const double F0 = p.force_unit();
+  unjam::ForceLP lp(sys, unjam::LpMethod::barrier, 1e-13);
+  long long flagged = 0;
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    EXPECT_NEAR(lp.max_fn(k), ref[k].fn_max, 1e-8 * F0) << "contact " << k;
+    flagged += lp.last_solve_loosened();
+  }
+  EXPECT_GE(lp.loosened_solves(), 1);
+  EXPECT_EQ(flagged, lp.loosened_solves());
+  // At the default tolerance none of them stalls.
+  unjam::ForceLP normal(sys);
+  for (int k = 0; k < sys.num_contacts(); ++k) normal.max_fn(k);
+  EXPECT_EQ(normal.loosened_solves(), 0);
+}
+
 TEST(ForceBounds, PackingNetworkLiesInsideEveryInterval) {
   for (const char* name : {"p50-mu0.1", "lattice16"}) {
     const Packing p = unjam::read_packing(fixture_dir(name));

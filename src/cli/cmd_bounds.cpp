@@ -104,6 +104,7 @@ void run_bounds(const BoundsOptions& opt) {
         {"method", opt.method}, {"lp_tolerance", lp.tolerance}}},
       {"min_lps_skipped", bounds.min_lps_skipped},
       {"iterations", bounds.iterations},
+      {"lps_at_looser_tolerance", bounds.loosened_solves},
       {"timings_s",
        {{"read_and_build", t_build}, {"rank", rank_seconds}, {"lp", bounds.seconds},
         {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", total}}},
@@ -116,6 +117,9 @@ void run_bounds(const BoundsOptions& opt) {
               rank.rank);
   std::printf("mean width / <fn>  %.6g\n", width_over_fn);
   std::printf("fn_min = 0 without own LP  %d contacts\n", bounds.min_lps_skipped);
+  if (bounds.loosened_solves > 0)
+    std::printf("barrier stalls     %lld LPs solved again at 10-100x the tolerance\n",
+                bounds.loosened_solves);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
   std::printf("wrote              %s, %s\n", csv_path.string().c_str(), json_path.string().c_str());

@@ -66,10 +66,10 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
   // fails, dual simplex decides, which classifies an empty set reliably.
   bool admissible = false;
   if (method == LpMethod::barrier) {
-    barrier_.solve(model);
+    const BarrierEnd end = barrier_.solve(model);
     iterations_ += model.numberIterations();
     const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), cols);
-    admissible = model.status() == 0 && y.minCoeff() >= -tolerance &&
+    admissible = end != BarrierEnd::failed && y.minCoeff() >= -tolerance &&
                  (Ay * y - system.rhs).lpNorm<Eigen::Infinity>() <=
                      1e-6 * system.rhs.lpNorm<Eigen::Infinity>();
   }
@@ -77,14 +77,14 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
     model.dual();
     iterations_ += model.numberIterations();
   }
-  if (model.status() == 1)
+  if (!admissible && model.status() == 1)
     throw Error("no admissible force network: no forces satisfy the balance of the " +
                 std::to_string(system.grains.size()) + " grains with the " +
                 std::to_string(system.num_contacts()) +
                 " contacts, P_in = P_ext, fn >= 0 and |ft| <= mu fn (mu = " +
                 std::to_string(system.mu) + "); is the packing static and its contact "
                 "list complete (try a larger --gap-tol)?");
-  if (model.status() != 0)
+  if (!admissible && model.status() != 0)
     throw Error("force bounds LP: first solve " + clp_status_text(model.status()));
   if (method_ == LpMethod::simplex) max_model_ = std::make_unique<ClpSimplex>(model);
   last_ = &model;
@@ -119,18 +119,21 @@ double ForceLP::optimize(int k, double direction) {
     objective = k;
   }
   model.setOptimizationDirection(direction);  // +1 minimise, -1 maximise
+  bool solved = false;
+  last_loosened_ = false;
   if (method_ == LpMethod::barrier) {
-    barrier_.solve(model);
+    const BarrierEnd end = barrier_.solve(model);
     iterations_ += model.numberIterations();
-    if (model.status() != 0) {  // rare barrier failure: finish by simplex
-      model.primal();
-      iterations_ += model.numberIterations();
-    }
-  } else {
+    last_loosened_ = end == BarrierEnd::optimal_loosened;
+    loosened_solves_ += last_loosened_;
+    solved = end != BarrierEnd::failed;
+  }
+  if (!solved) {  // the simplex method, or a barrier failure finished by simplex
     model.primal();
     iterations_ += model.numberIterations();
+    solved = model.status() == 0;
   }
-  if (model.status() != 0)
+  if (!solved)
     throw Error("force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
                 " of fn of contact " + std::to_string(k) + " " +
                 clp_status_text(model.status()));
@@ -152,17 +155,22 @@ ForceNetwork ForceLP::network() const {
 
 namespace {
 
+// Solver iterations and loosened solves (ForceLP::loosened_solves) of a batch of LPs.
+struct LpCounts {
+  long long iterations = 0, loosened = 0;
+};
+
 // Runs solve(lp, k) for every k of `todo` on `threads` threads, one ForceLP copy each, in
 // contiguous chunks (neighbouring contacts share grains: for the simplex the previous optimum
 // is a good start). An exception may not leave an OpenMP loop, so each thread records the
 // first error and skips the rest; it is rethrown here.
 template <class Solve>
-long long for_each_lp(const ForceLP& base, const std::vector<int>& todo, int threads,
-                      std::atomic<int>& done, const ForceBoundsOptions& options, int total,
-                      Solve solve) {
+LpCounts for_each_lp(const ForceLP& base, const std::vector<int>& todo, int threads,
+                     std::atomic<int>& done, const ForceBoundsOptions& options, int total,
+                     Solve solve) {
   const int n = static_cast<int>(todo.size());
-  if (n == 0) return 0;  // no model copies for nothing to do
-  std::atomic<long long> iterations{0};
+  if (n == 0) return {};  // no model copies for nothing to do
+  std::atomic<long long> iterations{0}, loosened{0};
   bool any_error = false;
   std::string error;
 #pragma omp parallel num_threads(std::min(threads, n))
@@ -188,9 +196,10 @@ long long for_each_lp(const ForceLP& base, const std::vector<int>& todo, int thr
       if (options.progress && omp_get_thread_num() == 0) options.progress(n_done, total);
     }
     iterations += lp.iterations();
+    loosened += lp.loosened_solves();
   }
   if (any_error) throw Error(error);
-  return iterations;
+  return {iterations, loosened};
 }
 
 }  // namespace
@@ -206,7 +215,11 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   const double open_tol = options.open_tol_F0 * system.F0;
 
   const ForceLP base(system, options.method, options.tolerance);  // throws if the set is empty
-  long long iterations = base.iterations();
+  LpCounts counts{base.iterations(), 0};
+  const auto count = [&counts](const LpCounts& more) {
+    counts.iterations += more.iterations;
+    counts.loosened += more.loosened;
+  };
   std::atomic<int> done{0};
   const int total = 2 * Nc;  // LPs, the minima certified without one counted as done
 
@@ -217,13 +230,14 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   for (int k = 0; k < Nc; ++k) all[k] = k;
   const int threads = std::max(1, options.threads);
   std::vector<Eigen::VectorXd> seen_min(threads, bounds.fn_min);
-  iterations += for_each_lp(base, all, threads, done, options, total, [&](ForceLP& lp, int k) {
+  count(for_each_lp(base, all, threads, done, options, total, [&](ForceLP& lp, int k) {
     bounds.fn_max[k] = lp.max_fn(k);
     ForceNetwork net = lp.network();
+    // Only networks admissible to the requested tolerance certify fn_min = 0.
     Eigen::VectorXd& seen = seen_min[omp_get_thread_num()];
-    seen = seen.cwiseMin(net.fn);
+    if (!lp.last_solve_loosened()) seen = seen.cwiseMin(net.fn);
     if (options.keep_networks_at_max) bounds.network_at_max[k] = std::move(net);
-  });
+  }));
   for (const Eigen::VectorXd& seen : seen_min) bounds.fn_min = bounds.fn_min.cwiseMin(seen);
 
   // A contact open (fn <= open_tol) in an admissible network can open: fn_min = 0 without
@@ -242,7 +256,7 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   for (std::atomic<char>& o : opened) o = 0;
   std::atomic<int> skipped{Nc - static_cast<int>(todo.size())};
   done += skipped;
-  iterations += for_each_lp(base, todo, threads, done, options, total, [&](ForceLP& lp, int k) {
+  count(for_each_lp(base, todo, threads, done, options, total, [&](ForceLP& lp, int k) {
     if (opened[k].load(std::memory_order_relaxed)) {
       bounds.fn_min[k] = 0.0;
       ++skipped;
@@ -250,13 +264,15 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
     }
     const double fn_min = lp.min_fn(k);
     bounds.fn_min[k] = fn_min <= open_tol ? 0.0 : fn_min;
+    if (lp.last_solve_loosened()) return;
     const Eigen::VectorXd fn = lp.network().fn;
     for (int j = 0; j < Nc; ++j)
       if (fn[j] <= open_tol) opened[j].store(1, std::memory_order_relaxed);
-  });
+  }));
   bounds.min_lps_skipped = skipped;
   if (options.progress) options.progress(total, total);
-  bounds.iterations = iterations;
+  bounds.iterations = counts.iterations;
+  bounds.loosened_solves = counts.loosened;
   bounds.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return bounds;

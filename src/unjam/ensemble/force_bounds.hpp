@@ -53,6 +53,8 @@ class ForceLP {
   // Builds the model and finds a first admissible network (barrier, or dual simplex). Throws
   // unjam::Error ("no admissible force network: ...") when the set is empty.
   // `tolerance`: CLP's primal and dual feasibility tolerance (absolute, on the scaled model).
+  // 1e-9 is the tested value; far below it (1e-13 on p50) CLP's barrier ends some LPs
+  // "optimal" at wrong points.
   explicit ForceLP(const EquilibriumSystem& system, LpMethod method = LpMethod::barrier,
                    double tolerance = 1e-9);
   ForceLP(const ForceLP& other);
@@ -69,6 +71,10 @@ class ForceLP {
   // Simplex and barrier iterations summed over every solve of this object (a copy starts
   // from 0).
   long long iterations() const { return iterations_; }
+  // Barrier solves that stalled and ended optimal at looser tolerances (BarrierEnd), over
+  // every solve of this object (a copy starts from 0), and whether the last one did.
+  long long loosened_solves() const { return loosened_solves_; }
+  bool last_solve_loosened() const { return last_loosened_; }
 
  private:
   double optimize(int k, double direction);
@@ -82,6 +88,8 @@ class ForceLP {
   // The contact whose fn is each model's current objective (-1: none, zero objective).
   int min_objective_ = -1, max_objective_ = -1;
   long long iterations_ = 0;
+  long long loosened_solves_ = 0;
+  bool last_loosened_ = false;
 };
 
 struct ForceBoundsOptions {
@@ -101,6 +109,7 @@ struct ForceBounds {
   std::vector<ForceNetwork> network_at_max;  // per contact, if keep_networks_at_max
   int min_lps_skipped = 0;  // minima certified 0 by another LP's network, without their own
   long long iterations = 0;                  // solver iterations over all LPs
+  long long loosened_solves = 0;  // LPs solved at looser tolerances (ForceLP::loosened_solves)
   double seconds = 0.0;                      // wall time of all LPs (model build included)
 };
 

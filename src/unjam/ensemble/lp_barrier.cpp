@@ -59,7 +59,7 @@ BarrierSolver::BarrierSolver(const BarrierSolver& other)
 
 BarrierSolver::~BarrierSolver() = default;
 
-void BarrierSolver::solve(ClpSimplex& model) {
+void BarrierSolver::solve_once(ClpSimplex& model) {
   // As ClpSolve's barrier path: borrow the model's arrays, no event handler, no scaling.
   ClpInterior barrier;
   barrier.borrowModel(model);
@@ -69,6 +69,28 @@ void BarrierSolver::solve(ClpSimplex& model) {
   barrier.scaling(0);
   barrier.primalDual();
   barrier.returnModel(model);
+}
+
+BarrierEnd BarrierSolver::solve(ClpSimplex& model) {
+  solve_once(model);
+  if (model.status() == 0) return BarrierEnd::optimal;
+  const double primal_tol = model.primalTolerance(), dual_tol = model.dualTolerance();
+  int iterations = model.numberIterations();
+  BarrierEnd end = BarrierEnd::failed;
+  for (const double looser : {10.0, 100.0}) {
+    model.setPrimalTolerance(looser * primal_tol);
+    model.setDualTolerance(looser * dual_tol);
+    solve_once(model);
+    iterations += model.numberIterations();
+    if (model.status() == 0) {
+      end = BarrierEnd::optimal_loosened;
+      break;
+    }
+  }
+  model.setPrimalTolerance(primal_tol);
+  model.setDualTolerance(dual_tol);
+  model.setNumberIterations(iterations);
+  return end;
 }
 
 }  // namespace unjam

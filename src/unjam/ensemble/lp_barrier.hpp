@@ -12,6 +12,16 @@
 //   - the factor switches to dense storage only when the trailing block is 95 % full
 //     (CLP: 70 %): the packings' separators are sparse and the dense kernel wastes work
 //     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000.
+//
+// CLP ends a solve optimal (status 0: the primal and dual objectives agree to the dual
+// tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops
+// decreasing. The second happens near the accuracy limit of the factorisation: 1 LP in ~40 at
+// 8000 disks (none in 800 at 2000 disks), with the objectives equal to ~2e-9 relative. Its
+// point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6 off), so it is
+// not accepted: the LP is solved again with the tolerances 10x and then 100x looser, which
+// ends optimal (the 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex
+// vertex). Primal simplex from the barrier's point, the former fallback, took 4.5 minutes
+// there, against 2 s per barrier solve.
 #include <memory>
 
 class ClpCholeskyBase;
@@ -19,8 +29,16 @@ class ClpSimplex;
 
 namespace unjam {
 
+// How a barrier solve ended (see above).
+enum class BarrierEnd {
+  optimal,            // at the model's own tolerances
+  optimal_loosened,   // after a stall, at 10x or 100x looser tolerances
+  failed,             // no optimum at 100x either (the caller decides what next)
+};
+
 class BarrierSolver {
  public:
+
   BarrierSolver();
   // A copy keeps the analysis (one solver per thread; the matrix must stay the same).
   BarrierSolver(const BarrierSolver& other);
@@ -28,11 +46,14 @@ class BarrierSolver {
   ~BarrierSolver();
 
   // Solves `model` from scratch (its objective, bounds and sense as set) and leaves the
-  // solution, status and iteration count in it, as ClpSimplex::initialSolve does. Every
-  // model passed to one solver (and its copies) must have the same constraint matrix.
-  void solve(ClpSimplex& model);
+  // solution, status and iteration count (of all attempts) in it, as ClpSimplex::initialSolve
+  // does; its tolerances are restored after a retry. Every model passed to one solver (and
+  // its copies) must have the same constraint matrix.
+  BarrierEnd solve(ClpSimplex& model);
 
  private:
+  void solve_once(ClpSimplex& model);
+
   // The factorisation right after its ordering and symbolic analysis (null until the first
   // solve has made them); each solve starts from a clone.
   std::unique_ptr<ClpCholeskyBase> analysed_;
