@@ -62,6 +62,10 @@ SCALES = {
               "probe_sample": 1000},
 }
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
+# mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
+# F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
+# ~1e-4 R_max that count as 2-15 redundant contacts at N = 500-2000 (docs/method.md).
+FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
 FIG1_MU = 0.5
 COLUMNS = ["mu", "N", "seed", "phi", "z", "F_cont_over_F0", "F_crit_over_F_cont", "alpha",
            "alpha_err"]
@@ -518,7 +522,8 @@ def build(args, cfg, R):
                 d = os.path.join(out, "packings", f"N{n}-mu{fmt_mu(mu)}-s{seed}")
                 tag = f"N{n}-mu{fmt_mu(mu)}-s{seed}"
                 stages.append(pack_stage(R, f"pack {tag}", d,
-                                         ["--n", n, "--mu", fmt_mu(mu), "--seed", seed]))
+                                         ["--n", n, "--mu", fmt_mu(mu), "--seed", seed]
+                                         + (FRICTIONLESS_PACK if mu == 0 else [])))
                 stages.append(probe_stage(R, f"probe {tag}", d, args.probe_g,
                                           cfg["probe_sample"], f"pack {tag}"))
                 probe_of[(mu, n, seed)] = (f"probe {tag}", d)

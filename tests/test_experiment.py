@@ -77,6 +77,20 @@ class ExperimentTiny(unittest.TestCase):
         self.assertEqual(set(outcomes(self.first).values()), {"ran"})
         self.assertEqual(len(outcomes(self.first)), 19)
 
+    def test_1_frictionless_packing_is_isostatic(self):
+        # mu = 0 is packed with tighter dynamics (FRICTIONLESS_PACK), so that its network is
+        # unique and F_crit = F_cont for every probed contact.
+        d = os.path.join(self.out, "packings/N100-mu0-s1")
+        with open(os.path.join(d, "meta.json")) as f:
+            dynamics = json.load(f)["settings"]["dynamics"]
+        self.assertEqual((dynamics["nlgs_tol"], dynamics["nlgs_max_sweeps"]), (1e-6, 2000))
+        with open(os.path.join(d, "probes.csv")) as f:
+            probes = list(csv.DictReader(f))
+        self.assertGreater(len(probes), 100)
+        for r in probes:
+            self.assertAlmostEqual(float(r["f_crit"]), float(r["f_cont"]),
+                                   delta=1e-6 * float(r["f_cont"]), msg=f"contact {r['contact']}")
+
     def test_2_report_matches_table(self):
         with open(os.path.join(self.out, "sweep.csv")) as f:
             rows = {r["mu"]: r for r in csv.DictReader(f)}
