@@ -80,7 +80,7 @@ TEST(HitAndRun, SameSeedSameSamples) {
 // Square lattice of four disks at mu = 0 (see test_force_bounds.cpp): the admissible set is
 // the simplex {h_A, h_B, v_A, v_B >= 0, sum = 4}. Uniform on it, each chain force has the
 // marginal 4 Beta(1, 3): mean 1, standard deviation sqrt(3/5), so eta = sqrt(3/5).
-TEST(HitAndRun, UniformOnHandMadeSimplex) {
+void expect_uniform_on_hand_made_simplex(int max_dense_columns) {
   Packing p;
   p.cell = {2.0, 2.0};
   p.particles.resize(4);
@@ -103,6 +103,7 @@ TEST(HitAndRun, UniformOnHandMadeSimplex) {
   const auto bounds = unjam::compute_force_bounds(sys);
   unjam::HitAndRunOptions options;
   options.samples = 20000;
+  options.max_dense_columns = max_dense_columns;
   const auto r = unjam::sample_hit_and_run(sys, bounds, options);
   EXPECT_EQ(r.dimension, 3);
   for (int k = 0; k < 8; ++k) {
@@ -112,11 +113,50 @@ TEST(HitAndRun, UniformOnHandMadeSimplex) {
   EXPECT_NEAR(r.eta, std::sqrt(0.6), 0.05);
 }
 
-TEST(HitAndRun, DenseLimitIsReported) {
+TEST(HitAndRun, UniformOnHandMadeSimplex) { expect_uniform_on_hand_made_simplex(4000); }
+
+// Beyond max_dense_columns the walk draws its directions through the sparse projector onto
+// null(A) instead of a dense basis: the same distribution, other random numbers.
+TEST(HitAndRun, SparseProjectorSamplesTheSameDistribution) {
+  expect_uniform_on_hand_made_simplex(0);
+
   const auto& d = p50();
-  unjam::HitAndRunOptions options;
-  options.max_dense_columns = 10;
-  EXPECT_THROW(unjam::sample_hit_and_run(d.sys, d.bounds, options), unjam::Error);
+  const double tol = 1e-9 * d.packing.force_unit();
+  constexpr int kBatches = 10, kPerBatch = 500;
+  // Batch means of fn per contact (successive samples of the walk are correlated; means of
+  // long batches are nearly independent, so their scatter gives an honest error).
+  const auto batch_means = [&](int max_dense_columns, unjam::testing::WorstViolation* worst) {
+    Eigen::MatrixXd means = Eigen::MatrixXd::Zero(d.sys.num_contacts(), kBatches);
+    int s = 0;
+    unjam::HitAndRunOptions options;
+    options.samples = kBatches * kPerBatch;
+    options.max_dense_columns = max_dense_columns;
+    options.on_sample = [&](const unjam::ForceNetwork& net) {
+      means.col(s++ / kPerBatch) += net.fn / kPerBatch;
+      if (worst) worst->add(net);
+    };
+    const auto r = unjam::sample_hit_and_run(d.sys, d.bounds, options);
+    return std::make_pair(r.dimension, means);
+  };
+  unjam::testing::WorstViolation worst{d.sys};
+  const auto [dim_dense, dense] = batch_means(4000, nullptr);
+  const auto [dim_sparse, sparse] = batch_means(0, &worst);
+  EXPECT_EQ(dim_sparse, dim_dense);
+  EXPECT_LT(worst.residual, 1e-9);
+  EXPECT_GE(worst.fn, -tol);
+  EXPECT_LE(worst.coulomb, tol);
+  // z_k = (difference of the two means) / (its error): about 1 in mean square if both walks
+  // sample one distribution; a sampler off by its error on every contact would give >= 4.
+  double sum_z2 = 0.0;
+  for (Eigen::Index k = 0; k < dense.rows(); ++k) {
+    const auto var = [&](const Eigen::MatrixXd& m) {
+      const double mean = m.row(k).mean();
+      return (m.row(k).array() - mean).square().sum() / (kBatches - 1) / kBatches;
+    };
+    const double diff = sparse.row(k).mean() - dense.row(k).mean();
+    sum_z2 += diff * diff / (var(dense) + var(sparse) + 1e-30);
+  }
+  EXPECT_LT(sum_z2 / static_cast<double>(dense.rows()), 3.0);
 }
 
 }  // namespace

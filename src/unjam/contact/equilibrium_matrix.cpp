@@ -136,18 +136,14 @@ void cone_to_forces(const EquilibriumSystem& system, const Eigen::VectorXd& y,
   }
 }
 
-RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_threshold) {
-  const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
-  RankInfo info;
-  info.rows = static_cast<int>(Ay.rows());
-  info.columns = static_cast<int>(Ay.cols());
-  info.threshold = relative_threshold;
-  // rank(A_y) = n - dim null(B), with B the tall one of A_y and A_y^T (n = its columns); the
-  // null space is small (periodic translations, a few mechanisms), so it is found directly.
-  const Eigen::SparseMatrix<double> B = Ay.rows() >= Ay.cols()
-                                            ? Eigen::SparseMatrix<double>(Ay)
-                                            : Eigen::SparseMatrix<double>(Ay.transpose());
+int numerical_rank(const Eigen::SparseMatrix<double>& A, double relative_threshold) {
+  // rank(A) = n - dim null(B), with B the tall one of A and A^T (n = its columns); the null
+  // space is small (periodic translations, a few mechanisms), so it is found directly.
+  const Eigen::SparseMatrix<double> B = A.rows() >= A.cols()
+                                            ? Eigen::SparseMatrix<double>(A)
+                                            : Eigen::SparseMatrix<double>(A.transpose());
   const int n = static_cast<int>(B.cols());
+  if (n == 0) return 0;
   double max_norm = 0.0;
   for (int j = 0; j < n; ++j) max_norm = std::max(max_norm, B.col(j).norm());
   // Subspace inverse iteration on G = B^T B + delta I (sparse LDLT, AMD ordering): each solve
@@ -179,7 +175,16 @@ RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_thres
     // room for the next-smallest directions. Otherwise (or B is all null) a larger block.
     if (2 * nullity <= block || block == n) break;
   }
-  info.rank = n - nullity;
+  return n - nullity;
+}
+
+RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_threshold) {
+  const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
+  RankInfo info;
+  info.rows = static_cast<int>(Ay.rows());
+  info.columns = static_cast<int>(Ay.cols());
+  info.threshold = relative_threshold;
+  info.rank = numerical_rank(Ay, relative_threshold);
   info.dimension = info.columns - info.rank;
   return info;
 }

@@ -86,4 +86,7 @@ struct RankInfo {
 // Eigen's SparseQR gave the same ranks in 28 s at 2000 disks (docs/ensemble.md).
 RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_threshold = 1e-10);
 
+// The same numerical rank for any sparse matrix (e.g. a subset of the columns of A_y).
+int numerical_rank(const Eigen::SparseMatrix<double>& A, double relative_threshold = 1e-10);
+
 }  // namespace unjam

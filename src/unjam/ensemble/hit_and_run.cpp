@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <coin/ClpSimplex.hpp>
 
 #include "unjam/core/error.hpp"
@@ -16,38 +18,117 @@ namespace unjam {
 
 namespace {
 
-// The equalities restricted to the walked columns, with the QR of their transpose:
-// A^T P = Q R. The first `rank` columns of Q span the row space, the rest the null space.
-struct AffineSet {
-  Eigen::MatrixXd A;  // m x n
-  Eigen::VectorXd rhs;
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
-  int rank = 0;
-
+// The affine set { y : A y = rhs } of the walked columns (A: m x n, sparse), as the walk
+// needs it: the dimension of its direction space null(A), a uniformly random unit direction
+// in that space, and the projection of a point back onto the set.
+class AffineSet {
+ public:
+  virtual ~AffineSet() = default;
+  int dimension() const { return dimension_; }
+  // dir: uniform on the unit sphere of null(A), from standard normal numbers of `normal`.
+  virtual void direction(std::mt19937_64& rng, std::normal_distribution<double>& normal,
+                         Eigen::VectorXd& dir) const = 0;
   // Moves y to the nearest point of A y = rhs (minimal-norm correction in the row space).
-  void project(Eigen::VectorXd& y) const {
-    const Eigen::VectorXd r = qr.colsPermutation().transpose() * (rhs - A * y);
-    const auto R = qr.matrixR().topLeftCorner(rank, rank);
-    const Eigen::VectorXd z =
-        R.transpose().triangularView<Eigen::Lower>().solve(r.head(rank));
-    Eigen::VectorXd full = Eigen::VectorXd::Zero(y.size());
-    full.head(rank) = z;
-    y += qr.householderQ() * full;
+  virtual void project(Eigen::VectorXd& y) const = 0;
+
+ protected:
+  int dimension_ = 0;
+};
+
+// Up to max_dense_columns: an orthonormal null-space basis B from the dense column-pivoting
+// QR of A^T (A^T P = Q R; the first `rank` columns of Q span the row space, the rest the null
+// space), and dir = B z / |z| with z standard normal in R^d.
+class DenseAffineSet : public AffineSet {
+ public:
+  DenseAffineSet(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& rhs)
+      : A_(A), rhs_(rhs) {
+    qr_.setThreshold(1e-10);
+    qr_.compute(A_.transpose());
+    rank_ = static_cast<int>(qr_.rank());
+    dimension_ = static_cast<int>(A_.cols()) - rank_;
+    const Eigen::MatrixXd Q = qr_.householderQ();
+    B_ = Q.rightCols(dimension_);
   }
+  void direction(std::mt19937_64& rng, std::normal_distribution<double>& normal,
+                 Eigen::VectorXd& dir) const override {
+    Eigen::VectorXd z(dimension_);
+    for (int i = 0; i < dimension_; ++i) z[i] = normal(rng);
+    dir.noalias() = B_ * (z / z.norm());
+  }
+  void project(Eigen::VectorXd& y) const override {
+    const Eigen::VectorXd r = qr_.colsPermutation().transpose() * (rhs_ - A_ * y);
+    const auto R = qr_.matrixR().topLeftCorner(rank_, rank_);
+    const Eigen::VectorXd z = R.transpose().triangularView<Eigen::Lower>().solve(r.head(rank_));
+    Eigen::VectorXd full = Eigen::VectorXd::Zero(y.size());
+    full.head(rank_) = z;
+    y += qr_.householderQ() * full;
+  }
+
+ private:
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd rhs_;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;
+  Eigen::MatrixXd B_;  // n x d
+  int rank_ = 0;
+};
+
+// Beyond max_dense_columns: the orthogonal projector onto null(A),
+//     P r = r - A^T x,   (A A^T) x = A r,
+// with one sparse LDLT of A A^T + delta I (delta = 1e-13 max diagonal: the dependent rows of
+// A make A A^T singular) and two steps of iterative refinement against A A^T, which remove
+// the regularisation's error. dir = P r / |P r| with r standard normal in R^n: P r is an
+// isotropic Gaussian in null(A), so dir is uniform on its sphere, as in the dense case. The
+// dimension is n - rank(A) by numerical_rank (equilibrium_matrix.hpp).
+class SparseAffineSet : public AffineSet {
+ public:
+  SparseAffineSet(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& rhs)
+      : A_(A), At_(A.transpose()), rhs_(rhs) {
+    AAt_ = A_ * At_;
+    Eigen::SparseMatrix<double> M = AAt_;
+    const double delta = 1e-13 * M.diagonal().maxCoeff();
+    for (int i = 0; i < M.rows(); ++i) M.coeffRef(i, i) += delta;
+    ldlt_.compute(M);
+    if (ldlt_.info() != Eigen::Success)
+      throw Error("hit-and-run: the factorisation of A A^T failed");
+    dimension_ = static_cast<int>(A_.cols()) - numerical_rank(A_);
+  }
+  void direction(std::mt19937_64& rng, std::normal_distribution<double>& normal,
+                 Eigen::VectorXd& dir) const override {
+    Eigen::VectorXd r(A_.cols());
+    for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = normal(rng);
+    dir = r - At_ * row_space_solve(A_ * r);
+    dir /= dir.norm();
+  }
+  void project(Eigen::VectorXd& y) const override {
+    y += At_ * row_space_solve(rhs_ - A_ * y);
+  }
+
+ private:
+  // x with (A A^T) x = b for b in the range of A.
+  Eigen::VectorXd row_space_solve(const Eigen::VectorXd& b) const {
+    Eigen::VectorXd x = ldlt_.solve(b);
+    for (int refine = 0; refine < 2; ++refine) x += ldlt_.solve(b - AAt_ * x);
+    return x;
+  }
+
+  Eigen::SparseMatrix<double> A_, At_, AAt_;
+  Eigen::VectorXd rhs_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
 };
 
 // Chebyshev-like centre: max s subject to A y = rhs, y_i >= s. Returns y and sets depth = s.
-Eigen::VectorXd interior_point(const AffineSet& set, double& depth) {
-  const int m = static_cast<int>(set.A.rows()), n = static_cast<int>(set.A.cols());
+Eigen::VectorXd interior_point(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& rhs,
+                               double& depth) {
+  const int m = static_cast<int>(A.rows()), n = static_cast<int>(A.cols());
   // Columns y_0 .. y_n-1, s; rows: the m equalities, then y_i - s >= 0.
   std::vector<CoinBigIndex> start{0};
   std::vector<int> index;
   std::vector<double> value;
   for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < m; ++i)
-      if (set.A(i, j) != 0.0) {
-        index.push_back(i);
-        value.push_back(set.A(i, j));
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
+      if (it.value() != 0.0) {
+        index.push_back(static_cast<int>(it.row()));
+        value.push_back(it.value());
       }
     index.push_back(m + j);
     value.push_back(1.0);
@@ -62,7 +143,7 @@ Eigen::VectorXd interior_point(const AffineSet& set, double& depth) {
   col_lb[n] = -COIN_DBL_MAX;
   obj[n] = -1.0;  // minimise -s
   std::vector<double> row_lb(m + n, 0.0), row_ub(m + n, COIN_DBL_MAX);
-  for (int i = 0; i < m; ++i) row_lb[i] = row_ub[i] = set.rhs[i];
+  for (int i = 0; i < m; ++i) row_lb[i] = row_ub[i] = rhs[i];
   ClpSimplex model;
   model.setLogLevel(0);
   model.loadProblem(n + 1, m + n, start.data(), index.data(), value.data(), col_lb.data(),
@@ -96,26 +177,25 @@ HitAndRunResult sample_hit_and_run(const EquilibriumSystem& system, const ForceB
     for (int j = 0; j < per; ++j) free_cols.push_back(per * k + j);
   }
   const int n = static_cast<int>(free_cols.size());
-  if (n > options.max_dense_columns)
-    throw Error("hit-and-run: " + std::to_string(n) + " cone columns exceed the dense "
-                "null-space limit of " + std::to_string(options.max_dense_columns) +
-                " (about " + std::to_string(options.max_dense_columns / 2) + " contacts)");
-
   const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
-  AffineSet set;
-  set.A.resize(Ay.rows(), n);
-  for (int j = 0; j < n; ++j) set.A.col(j) = Ay.col(free_cols[j]);
-  set.rhs = system.rhs;
-  set.qr.setThreshold(1e-10);
-  set.qr.compute(set.A.transpose());
-  set.rank = static_cast<int>(set.qr.rank());
-  const int d = n - set.rank;
+  Eigen::SparseMatrix<double> A(Ay.rows(), n);
+  {
+    std::vector<Eigen::Triplet<double>> entries;
+    for (int j = 0; j < n; ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(Ay, free_cols[j]); it; ++it)
+        entries.emplace_back(static_cast<int>(it.row()), j, it.value());
+    A.setFromTriplets(entries.begin(), entries.end());
+  }
+  std::unique_ptr<AffineSet> set;
+  if (n <= options.max_dense_columns)
+    set = std::make_unique<DenseAffineSet>(A, system.rhs);
+  else
+    set = std::make_unique<SparseAffineSet>(A, system.rhs);
+  const int d = set->dimension();
   result.dimension = d;
-  const Eigen::MatrixXd Q = set.qr.householderQ();
-  const Eigen::MatrixXd B = Q.rightCols(d);  // orthonormal null-space basis, n x d
 
-  Eigen::VectorXd y = interior_point(set, result.start_depth);
-  set.project(y);
+  Eigen::VectorXd y = interior_point(A, system.rhs, result.start_depth);
+  set->project(y);
   if (d > 0 && result.start_depth <= options.fixed_tol * system.F0)
     throw Error("hit-and-run: the admissible set has no interior in its affine hull (centre "
                 "depth " + std::to_string(result.start_depth) + "): some contact slides or "
@@ -126,13 +206,12 @@ HitAndRunResult sample_hit_and_run(const EquilibriumSystem& system, const ForceB
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  Eigen::VectorXd z(d), dir(n), y_full = Eigen::VectorXd::Zero(per * Nc);
+  Eigen::VectorXd dir(n), y_full = Eigen::VectorXd::Zero(per * Nc);
   constexpr long long kProjectEvery = 1000;
 
   auto step = [&]() {
     if (d == 0) return;
-    for (int i = 0; i < d; ++i) z[i] = normal(rng);
-    dir.noalias() = B * (z / z.norm());
+    set->direction(rng, normal, dir);
     // Chord {t : y + t dir >= 0}.
     double t_min = -std::numeric_limits<double>::infinity();
     double t_max = std::numeric_limits<double>::infinity();
@@ -146,7 +225,7 @@ HitAndRunResult sample_hit_and_run(const EquilibriumSystem& system, const ForceB
       throw Error("hit-and-run: unbounded or empty chord (the admissible set is not a "
                   "bounded polytope)");
     y += (t_min + (t_max - t_min) * uniform(rng)) * dir;
-    if (++result.steps % kProjectEvery == 0) set.project(y);
+    if (++result.steps % kProjectEvery == 0) set->project(y);
   };
 
   for (long long s = 0; s < burn_in; ++s) step();
