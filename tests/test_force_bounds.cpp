@@ -159,7 +159,7 @@ TEST(ForceBounds, SharedCholeskyAnalysisGivesTheFreshOptimum) {
 }
 
 TEST(ForceBounds, StalledBarrierIsSolvedAgainAtLooserTolerance) {
-  // At 8000 disks about 1 barrier solve in 40 stalls just short of the 1e-9 gap; p50 does the
+  // At 8000 disks a barrier solve now and then stalls just short of the 1e-9 gap; p50 does the
   // same at a tolerance of 1e-13 (the maximum of contact 59). Each such LP must be solved
   // again by the barrier at 10x / 100x the tolerance (not by the simplex fallback, minutes at
   // 8000 disks), be counted and flagged, and end at the right maximum.

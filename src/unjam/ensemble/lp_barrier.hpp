@@ -15,13 +15,14 @@
 //
 // CLP ends a solve optimal (status 0: the primal and dual objectives agree to the dual
 // tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops
-// decreasing. The second happens near the accuracy limit of the factorisation: 1 LP in ~40 at
-// 8000 disks (none in 800 at 2000 disks), with the objectives equal to ~2e-9 relative. Its
-// point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6 off), so it is
-// not accepted: the LP is solved again with the tolerances 10x and then 100x looser, which
-// ends optimal (the 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex
-// vertex). Primal simplex from the barrier's point, the former fallback, took 4.5 minutes
-// there, against 2 s per barrier solve.
+// decreasing. The second happens near the accuracy limit of the factorisation: 1 of 140 LPs
+// sampled at 8000 disks (none of 800 at 2000 disks), with the objectives equal to ~2e-9
+// relative. Its point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6
+// off, relative, with CLP's objectives equal to 2e-11), so it is not accepted: the LP is
+// solved again with the tolerances 10x and then 100x looser, which ends optimal (the
+// 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex). Primal simplex
+// from the barrier's point, the former fallback, took 4.5 minutes there, against 2 s per
+// barrier solve.
 #include <memory>
 
 class ClpCholeskyBase;
