@@ -26,6 +26,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <omp.h>
 
 #include "cli/commands.hpp"
 #include "unjam/core/atomic_file.hpp"
@@ -57,7 +58,7 @@ struct EnsembleOptions {
   double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
   double gap_tol = 1e-9;
   double fn_tol = 1e-9;
-  int threads = 1;
+  int threads = 0;  // 0: all cores
   bool write_samples = false;
 };
 
@@ -153,8 +154,10 @@ ProbeColumns run_probes(const Packing& packing, const EquilibriumSystem& sys,
   return out;
 }
 
-void run_ensemble(const EnsembleOptions& opt) {
+void run_ensemble(const EnsembleOptions& given) {
   const auto t_start = std::chrono::steady_clock::now();
+  EnsembleOptions opt = given;
+  if (opt.threads == 0) opt.threads = omp_get_max_threads();
   const Packing packing = read_packing(opt.dir);
   const EquilibriumSystem sys =
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
@@ -354,8 +357,9 @@ void add_ensemble_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)");
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0");
-  cmd->add_option("--threads", opt->threads, "OpenMP threads for the LP bounds and the probes")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--threads", opt->threads,
+                  "OpenMP threads for the LP bounds and the probes (0: all cores)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--write-samples", opt->write_samples,
                 "write DIR/ensemble-samples.csv (hit-and-run samples)");
   cmd->callback([opt] { run_ensemble(*opt); });
