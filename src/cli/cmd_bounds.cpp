@@ -10,7 +10,6 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
-#include <omp.h>
 
 #include "cli/commands.hpp"
 #include "cli/run_info.hpp"
@@ -48,7 +47,7 @@ void run_bounds(const BoundsOptions& opt) {
   const double rank_seconds = seconds_since(t_rank);
 
   ForceBoundsOptions lp;
-  lp.threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  lp.threads = thread_count(opt.threads);
   lp.method = opt.method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
   const int Nc = sys.num_contacts();
   if (Nc >= 500) {

@@ -26,9 +26,9 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
-#include <omp.h>
 
 #include "cli/commands.hpp"
+#include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
@@ -157,7 +157,7 @@ ProbeColumns run_probes(const Packing& packing, const EquilibriumSystem& sys,
 void run_ensemble(const EnsembleOptions& given) {
   const auto t_start = std::chrono::steady_clock::now();
   EnsembleOptions opt = given;
-  if (opt.threads == 0) opt.threads = omp_get_max_threads();
+  opt.threads = thread_count(opt.threads);
   const Packing packing = read_packing(opt.dir);
   const EquilibriumSystem sys =
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));

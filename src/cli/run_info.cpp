@@ -5,6 +5,8 @@
 #include <csignal>
 #include <cstdio>
 
+#include <omp.h>
+
 namespace unjam::cli {
 namespace {
 std::string g_command_line;
@@ -34,6 +36,8 @@ void set_command_line(int argc, char** argv) {
 }
 
 const std::string& command_line() { return g_command_line; }
+
+int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
 std::string format_duration(double s) {
   char buf[48];

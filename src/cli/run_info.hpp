@@ -1,12 +1,15 @@
 #pragma once
 // What every command records and prints about its own run: the command line that started
-// it (stored in every output) and durations in a readable form.
+// it (stored in every output), its thread count and durations in a readable form.
 #include <string>
 
 namespace unjam::cli {
 
 void set_command_line(int argc, char** argv);
 const std::string& command_line();
+
+// Threads of a run from its --threads option: 0 means all cores (OpenMP's maximum).
+int thread_count(int requested);
 
 // "42.0 s", "3 min 05 s", "2 h 10 min".
 std::string format_duration(double seconds);

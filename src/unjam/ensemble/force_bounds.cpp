@@ -76,16 +76,16 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
   if (!admissible) {
     model.dual();
     iterations_ += model.numberIterations();
+    if (model.status() == 1)
+      throw Error("no admissible force network: no forces satisfy the balance of the " +
+                  std::to_string(system.grains.size()) + " grains with the " +
+                  std::to_string(system.num_contacts()) +
+                  " contacts, P_in = P_ext, fn >= 0 and |ft| <= mu fn (mu = " +
+                  std::to_string(system.mu) + "); is the packing static and its contact "
+                  "list complete (try a larger --gap-tol)?");
+    if (model.status() != 0)
+      throw Error("force bounds LP: first solve " + clp_status_text(model.status()));
   }
-  if (!admissible && model.status() == 1)
-    throw Error("no admissible force network: no forces satisfy the balance of the " +
-                std::to_string(system.grains.size()) + " grains with the " +
-                std::to_string(system.num_contacts()) +
-                " contacts, P_in = P_ext, fn >= 0 and |ft| <= mu fn (mu = " +
-                std::to_string(system.mu) + "); is the packing static and its contact "
-                "list complete (try a larger --gap-tol)?");
-  if (!admissible && model.status() != 0)
-    throw Error("force bounds LP: first solve " + clp_status_text(model.status()));
   if (method_ == LpMethod::simplex) max_model_ = std::make_unique<ClpSimplex>(model);
   last_ = &model;
 }
@@ -158,6 +158,11 @@ namespace {
 // Solver iterations and loosened solves (ForceLP::loosened_solves) of a batch of LPs.
 struct LpCounts {
   long long iterations = 0, loosened = 0;
+  LpCounts& operator+=(const LpCounts& more) {
+    iterations += more.iterations;
+    loosened += more.loosened;
+    return *this;
+  }
 };
 
 // Runs solve(lp, k) for every k of `todo` on `threads` threads, one ForceLP copy each, in
@@ -216,10 +221,6 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
 
   const ForceLP base(system, options.method, options.tolerance);  // throws if the set is empty
   LpCounts counts{base.iterations(), 0};
-  const auto count = [&counts](const LpCounts& more) {
-    counts.iterations += more.iterations;
-    counts.loosened += more.loosened;
-  };
   std::atomic<int> done{0};
   const int total = 2 * Nc;  // LPs, the minima certified without one counted as done
 
@@ -230,14 +231,14 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   for (int k = 0; k < Nc; ++k) all[k] = k;
   const int threads = std::max(1, options.threads);
   std::vector<Eigen::VectorXd> seen_min(threads, bounds.fn_min);
-  count(for_each_lp(base, all, threads, done, options, total, [&](ForceLP& lp, int k) {
+  counts += for_each_lp(base, all, threads, done, options, total, [&](ForceLP& lp, int k) {
     bounds.fn_max[k] = lp.max_fn(k);
     ForceNetwork net = lp.network();
     // Only networks admissible to the requested tolerance certify fn_min = 0.
     Eigen::VectorXd& seen = seen_min[omp_get_thread_num()];
     if (!lp.last_solve_loosened()) seen = seen.cwiseMin(net.fn);
     if (options.keep_networks_at_max) bounds.network_at_max[k] = std::move(net);
-  }));
+  });
   for (const Eigen::VectorXd& seen : seen_min) bounds.fn_min = bounds.fn_min.cwiseMin(seen);
 
   // A contact open (fn <= open_tol) in an admissible network can open: fn_min = 0 without
@@ -256,7 +257,7 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   for (std::atomic<char>& o : opened) o = 0;
   std::atomic<int> skipped{Nc - static_cast<int>(todo.size())};
   done += skipped;
-  count(for_each_lp(base, todo, threads, done, options, total, [&](ForceLP& lp, int k) {
+  counts += for_each_lp(base, todo, threads, done, options, total, [&](ForceLP& lp, int k) {
     if (opened[k].load(std::memory_order_relaxed)) {
       bounds.fn_min[k] = 0.0;
       ++skipped;
@@ -268,7 +269,7 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
     const Eigen::VectorXd fn = lp.network().fn;
     for (int j = 0; j < Nc; ++j)
       if (fn[j] <= open_tol) opened[j].store(1, std::memory_order_relaxed);
-  }));
+  });
   bounds.min_lps_skipped = skipped;
   if (options.progress) options.progress(total, total);
   bounds.iterations = counts.iterations;
