@@ -5,18 +5,25 @@
 // diagonal, changing every iteration) by sparse Cholesky; their pattern depends on A alone,
 // so the ordering and symbolic analysis are done once, on the first solve, and reused.
 //
-// Two settings differ from CLP's defaults, measured on the 2000- and 8000-disk packings of
-// docs/benchmarks.md (the optima agree with CLP's own path to its accuracy, 4e-8 relative
-// over the 2000-disk bounds):
+// Three settings differ from CLP's defaults, measured on the packings of docs/benchmarks.md
+// (the optima agree with CLP's own path to its accuracy, 4e-8 relative over the 2000-disk
+// bounds):
 //   - the symbolic analysis is shared (CLP repeats it for every LP): ~3 % per LP;
 //   - the factor switches to dense storage only when the trailing block is 95 % full
 //     (CLP: 70 %): the packings' separators are sparse and the dense kernel wastes work
-//     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000.
+//     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000;
+//   - from kNestedDissectionMinRows rows of A on, the rows are ordered by METIS's nested
+//     dissection (dense rows, as the pressure row, last) instead of CLP's minimum degree.
+//     A packing's contact graph is nearly planar, where nested dissection needs the fewest
+//     operations as it grows: per LP 0.72 -> 0.63 s at 4000 disks (10 939 rows), 2.36 ->
+//     1.89 s at 8000 (21 829 rows); at 2000 disks (5410 rows) it is 2-12 % slower, at 500
+//     and 1000 within 10 %, so CLP's ordering stays below the threshold.
 //
 // CLP ends a solve optimal (status 0: the primal and dual objectives agree to the dual
 // tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops
 // decreasing. The second happens near the accuracy limit of the factorisation: 1 of 140 LPs
-// sampled at 8000 disks (none of 800 at 2000 disks), with the objectives equal to ~2e-9
+// sampled at 8000 disks, 10 of 4507 in all the bounds of a 2000-disk packing, with the
+// objectives equal to ~2e-9
 // relative. Its point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6
 // off, relative, with CLP's objectives equal to 2e-11), so it is not accepted: the LP is
 // solved again with the tolerances 10x and then 100x looser, which ends optimal (the
@@ -37,10 +44,15 @@ enum class BarrierEnd {
   failed,             // no optimum at 100x either (the caller decides what next)
 };
 
+// Rows of A from which the normal equations are ordered by METIS's nested dissection instead
+// of CLP's minimum degree (see above).
+constexpr int kNestedDissectionMinRows = 8000;
+
 class BarrierSolver {
  public:
-
-  BarrierSolver();
+  // `nested_dissection_rows`: the ordering is nested dissection for A with at least this
+  // many rows, CLP's own below.
+  explicit BarrierSolver(int nested_dissection_rows = kNestedDissectionMinRows);
   // A copy keeps the analysis (one solver per thread; the matrix must stay the same).
   BarrierSolver(const BarrierSolver& other);
   BarrierSolver& operator=(const BarrierSolver&) = delete;
@@ -52,9 +64,13 @@ class BarrierSolver {
   // its copies) must have the same constraint matrix.
   BarrierEnd solve(ClpSimplex& model);
 
+  // Whether the ordering of the analysis made by the first solve is nested dissection.
+  bool nested_dissection() const;
+
  private:
   void solve_once(ClpSimplex& model);
 
+  int nested_dissection_rows_;
   // The factorisation right after its ordering and symbolic analysis (null until the first
   // solve has made them); each solve starts from a clone.
   std::unique_ptr<ClpCholeskyBase> analysed_;
