@@ -62,6 +62,26 @@ TEST(CliPack, InvalidParametersAreRefused) {
   EXPECT_EQ(unjam("pack --from " + (out / "missing").string() + " --out " + out.string()).exit_code, 1);
 }
 
+TEST(CliPack, FrictionlessPackingReportsItsRedundantContacts) {
+  // Seed 3 of a 60-disk frictionless packing ends with one contact more than isostatic (an
+  // overlap of ~tol makes a pair touch); seed 1 ends isostatic. Only the first gets the hint
+  // to pack with tighter dynamics.
+  const fs::path out = fresh_dir("mu0");
+  const CommandRun redundant = unjam("pack --n 60 --mu 0 --seed 3 --out " + out.string() + " --quiet");
+  ASSERT_EQ(redundant.exit_code, 0) << redundant.output;
+  EXPECT_NE(redundant.output.find("isostatic count (contacts - (2N'-1)): 1"), std::string::npos)
+      << redundant.output;
+  EXPECT_NE(redundant.output.find("1 redundant contact(s)"), std::string::npos) << redundant.output;
+  EXPECT_NE(redundant.output.find("--tol 1e-6 --max-sweeps 2000"), std::string::npos)
+      << redundant.output;
+  const CommandRun isostatic = unjam("pack --n 60 --mu 0 --seed 1 --out " + out.string() + " --quiet");
+  ASSERT_EQ(isostatic.exit_code, 0) << isostatic.output;
+  EXPECT_NE(isostatic.output.find("isostatic count (contacts - (2N'-1)): 0"), std::string::npos)
+      << isostatic.output;
+  EXPECT_EQ(isostatic.output.find("redundant contact"), std::string::npos) << isostatic.output;
+  fs::remove_all(out);
+}
+
 TEST(CliPack, InterruptedRunLeavesAResumablePacking) {
   const fs::path out = fresh_dir("interrupt");
   const std::string args = "pack --n 800 --mu 0.1 --seed 2 --threads 1 --quiet --out " + out.string();

@@ -110,8 +110,15 @@ void run(PackOptions& o) {
               s.mu, s.phi, s.z, s.rattlers, s.N_c);
   std::printf("  <F_cont>/F0 %.4f  max overlap %.2e  max residual %.1e F0  P_in/P_ext %.12f\n",
               s.F_cont, s.max_overlap, s.max_force_residual, s.pressure_ratio);
-  if (s.isostatic_excess)
+  if (s.isostatic_excess) {
     std::printf("  isostatic count (contacts - (2N'-1)): %lld\n", static_cast<long long>(*s.isostatic_excess));
+    // Redundant contacts of a frictionless packing come from overlaps of ~tol (docs/method.md):
+    // its force network is then not unique, and F_crit can exceed F_cont.
+    if (*s.isostatic_excess > 0)
+      std::printf("  %lld redundant contact(s), from overlaps up to %.1e: tighter dynamics "
+                  "(--tol 1e-6 --max-sweeps 2000) leave fewer (docs/method.md)\n",
+                  static_cast<long long>(*s.isostatic_excess), s.max_overlap);
+  }
   std::printf("  %lld steps, %lld sweeps (%.1f per step), %d static solve attempt(s), %s wall, "
               "%.1f M contact updates/s\n",
               static_cast<long long>(r.steps), static_cast<long long>(r.sweeps),
