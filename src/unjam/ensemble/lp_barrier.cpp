@@ -23,7 +23,8 @@ constexpr int kMaxBarrierIterations = 1000;
 // A fill-reducing ordering of A D A^T by METIS's nested dissection, as CLP stores it:
 // permute[new] = old row. Dense rows of A (more than 10x the mean count and 100 entries, as
 // the pressure row: its row of A D A^T is full) would make every separator large; they are
-// left out of the graph and ordered last, as a minimum-degree ordering does.
+// left out of the graph and ordered last, as a minimum-degree ordering does. Empty if METIS
+// fails (Eigen then reports on std::cerr and returns no permutation).
 std::vector<int> nested_dissection_order(const ClpMatrixBase& A, int rows) {
   const int cols = A.getNumCols();
   const CoinBigIndex* start = A.getVectorStarts();
@@ -53,6 +54,7 @@ std::vector<int> nested_dissection_order(const ClpMatrixBase& A, int rows) {
   const Eigen::SparseMatrix<double, Eigen::ColMajor, int> BBt = B * B.transpose();
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P;
   Eigen::MetisOrdering<int>()(BBt, P);  // P.indices()[new] = old, as METIS's perm
+  if (P.size() != static_cast<Eigen::Index>(sparse_rows.size())) return {};
   std::vector<int> permute;
   permute.reserve(rows);
   for (int i = 0; i < P.size(); ++i) permute.push_back(sparse_rows[P.indices()[i]]);
@@ -77,10 +79,11 @@ class SharedAnalysisCholesky : public ClpCholeskyBase {
   int order(ClpInterior* model) override {
     if (!analysed_) {
       // CLP's order() also builds the row copy and sizes that symbolic() needs; for large
-      // matrices its minimum-degree permutation is then replaced.
+      // matrices its minimum-degree permutation is then replaced (kept if METIS fails).
       const int status = ClpCholeskyBase::order(model);
       if (status != 0 || numberRows_ < nested_dissection_rows_) return status;
       const std::vector<int> permute = nested_dissection_order(*model->clpMatrix(), numberRows_);
+      if (permute.empty()) return 0;
       for (int i = 0; i < numberRows_; ++i) {
         permute_[i] = permute[i];
         permuteInverse_[permute[i]] = i;

@@ -23,8 +23,7 @@
 // tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops
 // decreasing. The second happens near the accuracy limit of the factorisation: 1 of 140 LPs
 // sampled at 8000 disks, 10 of 4507 in all the bounds of a 2000-disk packing, with the
-// objectives equal to ~2e-9
-// relative. Its point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6
+// objectives equal to ~2e-9 relative. Its point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6
 // off, relative, with CLP's objectives equal to 2e-11), so it is not accepted: the LP is
 // solved again with the tolerances 10x and then 100x looser, which ends optimal (the
 // 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex). Primal simplex
