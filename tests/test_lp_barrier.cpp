@@ -2,11 +2,10 @@
 // equations (used by default from kNestedDissectionMinRows rows on) against CLP's own.
 #include <gtest/gtest.h>
 
-#include <vector>
-
 #include <coin/ClpSimplex.hpp>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/ensemble/lp_barrier.hpp"
 #include "unjam/packing/packing_io.hpp"
 
@@ -14,20 +13,10 @@ namespace {
 
 std::string fixture_dir(const char* name) { return std::string(UNJAM_FIXTURES_DIR) + "/" + name; }
 
-// The force-bound LP of a system in cone coordinates y >= 0 (as ForceLP builds it), with a
-// zero objective.
+// The force-bound LP of a system with a zero objective, as ForceLP builds it.
 ClpSimplex force_lp_model(const unjam::EquilibriumSystem& sys) {
-  const Eigen::SparseMatrix<double> Ay = unjam::cone_matrix(sys);
-  const int rows = static_cast<int>(Ay.rows()), cols = static_cast<int>(Ay.cols());
-  const std::vector<CoinBigIndex> start(Ay.outerIndexPtr(), Ay.outerIndexPtr() + cols + 1);
-  const std::vector<double> lb(cols, 0.0), ub(cols, COIN_DBL_MAX), obj(cols, 0.0);
-  const std::vector<double> b(sys.rhs.data(), sys.rhs.data() + rows);
   ClpSimplex model;
-  model.loadProblem(cols, rows, start.data(), Ay.innerIndexPtr(), Ay.valuePtr(), lb.data(),
-                    ub.data(), obj.data(), b.data(), b.data());
-  model.setLogLevel(0);
-  model.setPrimalTolerance(1e-9);
-  model.setDualTolerance(1e-9);
+  unjam::load_admissible_set(model, unjam::cone_matrix(sys), sys.rhs, 1e-9);
   return model;
 }
 

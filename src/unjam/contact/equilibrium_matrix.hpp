@@ -24,6 +24,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
 #include "unjam/packing/packing.hpp"
@@ -88,5 +89,21 @@ RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_thres
 
 // The same numerical rank for any sparse matrix (e.g. a subset of the columns of A_y).
 int numerical_rank(const Eigen::SparseMatrix<double>& A, double relative_threshold = 1e-10);
+
+// G = B^T B of a sparse B, with the sparse LDLT (AMD ordering) of G + delta I, delta = 1e-13
+// max G_ii: B's dependent columns make G singular, and delta keeps the factorisation defined
+// (a solve amplifies a null direction of B by 1/delta). The factorisation behind
+// numerical_rank, shared with the hit-and-run projector (ensemble/hit_and_run), which solves
+// with it for A A^T (B = A^T). Throws unjam::Error if the factorisation fails.
+struct RegularisedGram {
+  explicit RegularisedGram(const Eigen::SparseMatrix<double>& B);
+  Eigen::SparseMatrix<double> G;  // B^T B, without delta
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+};
+
+// Numerical rank of a tall B (rows >= columns) given gram = RegularisedGram(B): columns of B
+// minus the dimension of its null space.
+int numerical_rank(const Eigen::SparseMatrix<double>& B, const RegularisedGram& gram,
+                   double relative_threshold = 1e-10);
 
 }  // namespace unjam

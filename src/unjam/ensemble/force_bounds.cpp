@@ -40,6 +40,19 @@ std::string clp_status_text(int status) {
 
 }  // namespace
 
+void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay,
+                         const Eigen::VectorXd& rhs, double tolerance) {
+  const int rows = static_cast<int>(Ay.rows()), cols = static_cast<int>(Ay.cols());
+  const std::vector<CoinBigIndex> start(Ay.outerIndexPtr(), Ay.outerIndexPtr() + cols + 1);
+  const std::vector<double> col_lb(cols, 0.0), col_ub(cols, COIN_DBL_MAX), obj(cols, 0.0);
+  const std::vector<double> row_b(rhs.data(), rhs.data() + rows);
+  model.loadProblem(cols, rows, start.data(), Ay.innerIndexPtr(), Ay.valuePtr(),
+                    col_lb.data(), col_ub.data(), obj.data(), row_b.data(), row_b.data());
+  model.setLogLevel(0);
+  model.setPrimalTolerance(tolerance);
+  model.setDualTolerance(tolerance);
+}
+
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
     : system_(&system),
       method_(method),
@@ -48,17 +61,9 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
   if (system.num_contacts() == 0)
     throw Error("no admissible force network: the packing has no contact to carry P_ext");
   const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
-  const int rows = static_cast<int>(Ay.rows()), cols = static_cast<int>(Ay.cols());
-  std::vector<CoinBigIndex> start(Ay.outerIndexPtr(), Ay.outerIndexPtr() + cols + 1);
-  // Columns y >= 0 (the Coulomb cone and fn >= 0); rows: equalities A_y y = rhs.
-  const std::vector<double> col_lb(cols, 0.0), col_ub(cols, COIN_DBL_MAX), obj(cols, 0.0);
-  const std::vector<double> row_b(system.rhs.data(), system.rhs.data() + rows);
+  const int cols = static_cast<int>(Ay.cols());
   ClpSimplex& model = *min_model_;
-  model.loadProblem(cols, rows, start.data(), Ay.innerIndexPtr(), Ay.valuePtr(),
-                    col_lb.data(), col_ub.data(), obj.data(), row_b.data(), row_b.data());
-  model.setLogLevel(0);
-  model.setPrimalTolerance(tolerance);
-  model.setDualTolerance(tolerance);
+  load_admissible_set(model, Ay, system.rhs, tolerance);
   // A first admissible network. The barrier method needs no basis and finds one fastest
   // (0.2 s against 5 s of dual simplex at 2000 disks); the simplex method needs the basis,
   // and a zero objective is dual feasible: dual simplex. The barrier may call an empty set

@@ -46,6 +46,12 @@ std::vector<ContactState> contact_states(const ForceNetwork& network, double mu,
 //            contact grows about like N^2.
 enum class LpMethod { barrier, simplex };
 
+// Loads the admissible set into `model` in cone coordinates: columns y >= 0 (the Coulomb
+// cone and fn >= 0), rows A_y y = rhs (Ay = cone_matrix(system)), a zero objective, no log,
+// primal and dual tolerance `tolerance` (see ForceLP). The model ForceLP solves.
+void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay,
+                         const Eigen::VectorXd& rhs, double tolerance);
+
 // The LP over the admissible set of one system, re-solved for one objective after another.
 // Copyable: each copy owns its own CLP models and bases (one per thread).
 class ForceLP {

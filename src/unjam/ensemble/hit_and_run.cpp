@@ -74,23 +74,18 @@ class DenseAffineSet : public AffineSet {
 
 // Beyond max_dense_columns: the orthogonal projector onto null(A),
 //     P r = r - A^T x,   (A A^T) x = A r,
-// with one sparse LDLT of A A^T + delta I (delta = 1e-13 max diagonal: the dependent rows of
-// A make A A^T singular) and two steps of iterative refinement against A A^T, which remove
-// the regularisation's error. dir = P r / |P r| with r standard normal in R^n: P r is an
-// isotropic Gaussian in null(A), so dir is uniform on its sphere, as in the dense case. The
-// dimension is n - rank(A) by numerical_rank (equilibrium_matrix.hpp).
+// with one sparse LDLT of A A^T + delta I (RegularisedGram of A^T, equilibrium_matrix.hpp:
+// the dependent rows of A make A A^T singular) and two steps of iterative refinement against
+// A A^T, which remove the regularisation's error. dir = P r / |P r| with r standard normal in
+// R^n: P r is an isotropic Gaussian in null(A), so dir is uniform on its sphere, as in the
+// dense case. The dimension is n - rank(A) by numerical_rank, on the same factorisation
+// when A^T is tall (as for a packing: more cone columns than rows).
 class SparseAffineSet : public AffineSet {
  public:
   SparseAffineSet(const Eigen::SparseMatrix<double>& A, const Eigen::VectorXd& rhs)
-      : A_(A), At_(A.transpose()), rhs_(rhs) {
-    AAt_ = A_ * At_;
-    Eigen::SparseMatrix<double> M = AAt_;
-    const double delta = 1e-13 * M.diagonal().maxCoeff();
-    for (int i = 0; i < M.rows(); ++i) M.coeffRef(i, i) += delta;
-    ldlt_.compute(M);
-    if (ldlt_.info() != Eigen::Success)
-      throw Error("hit-and-run: the factorisation of A A^T failed");
-    dimension_ = static_cast<int>(A_.cols()) - numerical_rank(A_);
+      : A_(A), At_(A.transpose()), rhs_(rhs), AAt_(At_) {
+    const int rank = At_.rows() >= At_.cols() ? numerical_rank(At_, AAt_) : numerical_rank(A_);
+    dimension_ = static_cast<int>(A_.cols()) - rank;
   }
   void direction(std::mt19937_64& rng, std::normal_distribution<double>& normal,
                  Eigen::VectorXd& dir) const override {
@@ -106,14 +101,14 @@ class SparseAffineSet : public AffineSet {
  private:
   // x with (A A^T) x = b for b in the range of A.
   Eigen::VectorXd row_space_solve(const Eigen::VectorXd& b) const {
-    Eigen::VectorXd x = ldlt_.solve(b);
-    for (int refine = 0; refine < 2; ++refine) x += ldlt_.solve(b - AAt_ * x);
+    Eigen::VectorXd x = AAt_.ldlt.solve(b);
+    for (int refine = 0; refine < 2; ++refine) x += AAt_.ldlt.solve(b - AAt_.G * x);
     return x;
   }
 
-  Eigen::SparseMatrix<double> A_, At_, AAt_;
+  Eigen::SparseMatrix<double> A_, At_;
   Eigen::VectorXd rhs_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+  RegularisedGram AAt_;  // G = A A^T and its regularised LDLT
 };
 
 // Chebyshev-like centre: max s subject to A y = rhs, y_i >= s. Returns y and sets depth = s.
