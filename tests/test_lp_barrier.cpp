@@ -1,12 +1,22 @@
-// The barrier driver of the force-bound LPs: its nested-dissection ordering of the normal
-// equations (used by default from kNestedDissectionMinRows rows on) against CLP's own.
+// The barrier driver of the force-bound LPs: its normal equations, formed by the precomputed
+// scatter, against CLP's own assembly; its nested-dissection ordering (used by default from
+// kNestedDissectionMinRows rows on) against CLP's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <coin/ClpInterior.hpp>
 #include <coin/ClpSimplex.hpp>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/ensemble/lp_barrier.hpp"
+#include "unjam/ensemble/normal_equations.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace {
@@ -28,6 +38,48 @@ double optimal_fn(unjam::BarrierSolver& solver, ClpSimplex& model, int k, double
   EXPECT_EQ(solver.solve(model), unjam::BarrierEnd::optimal) << "contact " << k;
   const double* y = model.primalColumnSolution();
   return 0.5 * (y[2 * k] + y[2 * k + 1]);
+}
+
+TEST(NormalEquationsCholesky, ScatteredAssemblyFactorisesAsClpsOwn) {
+  // On p50, for the minimum-degree and the nested-dissection ordering: A D A^T with D spread
+  // over eight decades (as near a barrier optimum) is factorised once with the scatter and
+  // once with CLP's own assembly (the base class's factorize); both factors must solve
+  // (A D A^T) x = b to a residual at rounding level. A's rows are dependent (the grains'
+  // force balances sum to zero), so b is taken in the range of A D A^T, and x is not unique:
+  // the two x differ along the null space.
+  const unjam::Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  ClpSimplex model = force_lp_model(sys);
+  const Eigen::SparseMatrix<double> A = unjam::cone_matrix(sys);
+  const int rows = static_cast<int>(A.rows()), cols = static_cast<int>(A.cols());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> exponent(-6.0, 2.0);
+  std::vector<double> diagonal(cols + rows, 0.0);  // slacks of the equality rows: 0
+  for (int c = 0; c < cols; ++c) diagonal[c] = std::pow(10.0, exponent(rng));
+  const Eigen::Map<const Eigen::VectorXd> d(diagonal.data(), cols);
+  Eigen::MatrixXd M = Eigen::MatrixXd(A) * d.asDiagonal() * Eigen::MatrixXd(A).transpose();
+  const Eigen::VectorXd b = M * Eigen::VectorXd::Random(rows);
+  for (const int nested_dissection_rows : {unjam::kNestedDissectionMinRows, 0}) {
+    ClpInterior interior;
+    interior.borrowModel(model);
+    std::unique_ptr<ClpCholeskyBase> keep;
+    unjam::NormalEquationsCholesky cholesky(&keep, nested_dissection_rows, 0.95);
+    ASSERT_EQ(cholesky.order(&interior), 0);
+    ASSERT_EQ(cholesky.symbolic(), 0);
+    ASSERT_TRUE(cholesky.scatter_assembly());
+    EXPECT_EQ(cholesky.nested_dissection(), nested_dissection_rows == 0);
+    for (const bool scatter : {true, false}) {
+      std::vector<int> rows_dropped(rows, 0);
+      if (scatter)
+        cholesky.factorize(diagonal.data(), rows_dropped.data());
+      else
+        cholesky.ClpCholeskyBase::factorize(diagonal.data(), rows_dropped.data());
+      Eigen::VectorXd x = b;
+      cholesky.solve(x.data());
+      EXPECT_LT((M * x - b).norm(), 1e-10 * b.norm()) << (scatter ? "scatter" : "CLP's");
+    }
+    interior.returnModel(model);
+  }
 }
 
 TEST(BarrierSolver, NestedDissectionOrderingGivesTheSameOptima) {

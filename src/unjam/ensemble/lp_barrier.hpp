@@ -5,13 +5,16 @@
 // diagonal, changing every iteration) by sparse Cholesky; their pattern depends on A alone,
 // so the ordering and symbolic analysis are done once, on the first solve, and reused.
 //
-// Three settings differ from CLP's defaults, measured on the packings of docs/benchmarks.md
-// (the optima agree with CLP's own path to its accuracy, 4e-8 relative over the 2000-disk
-// bounds):
+// Four settings differ from CLP's defaults (NormalEquationsCholesky, normal_equations.hpp),
+// measured on the packings of docs/benchmarks.md (the optima agree with CLP's own path to its
+// accuracy, 4e-8 relative over the 2000-disk bounds):
 //   - the symbolic analysis is shared (CLP repeats it for every LP): ~3 % per LP;
 //   - the factor switches to dense storage only when the trailing block is 95 % full
 //     (CLP: 70 %): the packings' separators are sparse and the dense kernel wastes work
 //     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000;
+//   - A D A^T is formed by a scatter precomputed from A and the factor's pattern instead of
+//     CLP's row-by-row gather: per LP 0.183 -> 0.160 s at 2000 disks (max and min LPs of
+//     60 contacts), 1.63 -> 1.45 s at 8000 (4 contacts), the optima equal to 4e-11;
 //   - from kNestedDissectionMinRows rows of A on, the rows are ordered by METIS's nested
 //     dissection (dense rows, as the pressure row, last) instead of CLP's minimum degree.
 //     A packing's contact graph is nearly planar, where nested dissection needs the fewest
@@ -23,12 +26,12 @@
 // tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops
 // decreasing. The second happens near the accuracy limit of the factorisation: 1 of 140 LPs
 // sampled at 8000 disks, 10 of 4507 in all the bounds of a 2000-disk packing, with the
-// objectives equal to ~2e-9 relative. Its point is not always that close (a case on p50 at tolerance 1e-12 was 2e-6
-// off, relative, with CLP's objectives equal to 2e-11), so it is not accepted: the LP is
-// solved again with the tolerances 10x and then 100x looser, which ends optimal (the
-// 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex). Primal simplex
-// from the barrier's point, the former fallback, took 4.5 minutes there, against 2 s per
-// barrier solve.
+// objectives equal to ~2e-9 relative. Its point is not always that close (a case on p50 at
+// tolerance 1e-12 was 2e-6 off, relative, with CLP's objectives equal to 2e-11), so it is not
+// accepted: the LP is solved again with the tolerances 10x and then 100x looser, which ends
+// optimal (the 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex).
+// Primal simplex from the barrier's point, the former fallback, took 4.5 minutes there,
+// against 2 s per barrier solve.
 #include <memory>
 
 class ClpCholeskyBase;
