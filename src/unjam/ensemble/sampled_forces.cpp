@@ -25,7 +25,8 @@ SampledForces SampledForcesAccumulator::result() const {
   r.sample_max = max_;
   r.mean = mean_;
   // Sample standard deviation (n - 1); zero for a single sample.
-  r.std = n_ > 1 ? (m2_ / (n_ - 1.0)).cwiseSqrt().eval() : Eigen::VectorXd::Zero(mean_.size()).eval();
+  r.std = n_ > 1 ? (m2_ / (n_ - 1.0)).cwiseSqrt().eval()
+                 : Eigen::VectorXd::Zero(mean_.size()).eval();
   r.mean_fn = mean_.size() > 0 ? mean_.mean() : 0.0;
   r.eta = r.mean_fn > 0.0 ? r.std.mean() / r.mean_fn : 0.0;
   return r;
