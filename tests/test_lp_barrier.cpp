@@ -3,7 +3,6 @@
 // kNestedDissectionMinRows rows on) against CLP's.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -13,15 +12,13 @@
 #include <coin/ClpInterior.hpp>
 #include <coin/ClpSimplex.hpp>
 
-#include "unjam/contact/equilibrium_matrix.hpp"
-#include "unjam/ensemble/force_bounds.hpp"
+#include "fixture_p50.hpp"
 #include "unjam/ensemble/lp_barrier.hpp"
 #include "unjam/ensemble/normal_equations.hpp"
-#include "unjam/packing/packing_io.hpp"
 
 namespace {
 
-std::string fixture_dir(const char* name) { return std::string(UNJAM_FIXTURES_DIR) + "/" + name; }
+using unjam::testing::p50;
 
 // The force-bound LP of a system with a zero objective, as ForceLP builds it.
 ClpSimplex force_lp_model(const unjam::EquilibriumSystem& sys) {
@@ -47,23 +44,22 @@ TEST(NormalEquationsCholesky, ScatteredAssemblyFactorisesAsClpsOwn) {
   // (A D A^T) x = b to a residual at rounding level. A's rows are dependent (the grains'
   // force balances sum to zero), so b is taken in the range of A D A^T, and x is not unique:
   // the two x differ along the null space.
-  const unjam::Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
-  const auto sys = unjam::build_equilibrium_system(p);
+  const auto& sys = p50().sys;
   ClpSimplex model = force_lp_model(sys);
-  const Eigen::SparseMatrix<double> A = unjam::cone_matrix(sys);
+  const Eigen::MatrixXd A(unjam::cone_matrix(sys));
   const int rows = static_cast<int>(A.rows()), cols = static_cast<int>(A.cols());
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> exponent(-6.0, 2.0);
   std::vector<double> diagonal(cols + rows, 0.0);  // slacks of the equality rows: 0
   for (int c = 0; c < cols; ++c) diagonal[c] = std::pow(10.0, exponent(rng));
   const Eigen::Map<const Eigen::VectorXd> d(diagonal.data(), cols);
-  Eigen::MatrixXd M = Eigen::MatrixXd(A) * d.asDiagonal() * Eigen::MatrixXd(A).transpose();
+  const Eigen::MatrixXd M = A * d.asDiagonal() * A.transpose();
   const Eigen::VectorXd b = M * Eigen::VectorXd::Random(rows);
   for (const int nested_dissection_rows : {unjam::kNestedDissectionMinRows, 0}) {
     ClpInterior interior;
     interior.borrowModel(model);
     std::unique_ptr<ClpCholeskyBase> keep;
-    unjam::NormalEquationsCholesky cholesky(&keep, nested_dissection_rows, 0.95);
+    unjam::NormalEquationsCholesky cholesky(&keep, nested_dissection_rows);
     ASSERT_EQ(cholesky.order(&interior), 0);
     ASSERT_EQ(cholesky.symbolic(), 0);
     ASSERT_TRUE(cholesky.scatter_assembly());
@@ -86,10 +82,9 @@ TEST(BarrierSolver, NestedDissectionOrderingGivesTheSameOptima) {
   // p50 (136 rows; the pressure row is dense, one entry per cone column) ordered by nested
   // dissection, forced by a threshold of 0 rows, against CLP's minimum degree: every minimum
   // and maximum must agree to the LP accuracy.
-  const unjam::Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
-  const auto sys = unjam::build_equilibrium_system(p);
+  const auto& sys = p50().sys;
   ASSERT_LT(sys.A.rows(), unjam::kNestedDissectionMinRows);
-  const double F0 = p.force_unit();
+  const double F0 = p50().packing.force_unit();
   ClpSimplex model_clp = force_lp_model(sys), model_nd = force_lp_model(sys);
   unjam::BarrierSolver clp_order, nested(0);
   for (int k = 0; k < sys.num_contacts(); ++k) {

@@ -35,9 +35,9 @@ std::vector<ContactState> contact_states(const ForceNetwork& network, double mu,
 
 // How each LP is solved (timings in docs/ensemble.md):
 //   barrier  CLP's interior-point method without crossover, every LP from scratch with one
-//            shared symbolic analysis (lp_barrier.hpp). Its cost grows like one sparse
-//            Cholesky per iteration; the fastest at every size measured. The optimal network
-//            it returns lies inside the optimal face.
+//            shared symbolic analysis (lp_barrier.hpp, normal_equations.hpp). Its cost grows
+//            like one sparse Cholesky per iteration; the fastest at every size measured.
+//            The optimal network it returns lies inside the optimal face.
 //   simplex  primal simplex warm-started from the previous optimal basis (one model for the
 //            minima, one for the maxima; dual simplex measured no faster: CLP falls back to
 //            primal because a changed objective leaves the basis dual infeasible). The

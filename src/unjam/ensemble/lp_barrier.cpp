@@ -10,8 +10,6 @@ namespace unjam {
 
 namespace {
 
-// Fill fraction of the trailing block above which the factor is stored dense (see header).
-constexpr double kGoDense = 0.95;
 // CLP's own limit for models of more than 10^4 rows and columns (ClpSolve).
 constexpr int kMaxBarrierIterations = 1000;
 
@@ -36,8 +34,7 @@ void BarrierSolver::solve_once(ClpSimplex& model) {
   barrier.borrowModel(model);
   barrier.eventHandler()->setSimplex(nullptr);
   barrier.setCholesky(analysed_ ? analysed_->clone()
-                                : new NormalEquationsCholesky(&analysed_, nested_dissection_rows_,
-                                                                kGoDense));
+                                : new NormalEquationsCholesky(&analysed_, nested_dissection_rows_));
   barrier.setMaximumBarrierIterations(kMaxBarrierIterations);
   barrier.scaling(0);
   barrier.primalDual();

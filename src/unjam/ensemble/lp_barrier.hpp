@@ -5,22 +5,9 @@
 // diagonal, changing every iteration) by sparse Cholesky; their pattern depends on A alone,
 // so the ordering and symbolic analysis are done once, on the first solve, and reused.
 //
-// Four settings differ from CLP's defaults (NormalEquationsCholesky, normal_equations.hpp),
-// measured on the packings of docs/benchmarks.md (the optima agree with CLP's own path to its
-// accuracy, 4e-8 relative over the 2000-disk bounds):
-//   - the symbolic analysis is shared (CLP repeats it for every LP): ~3 % per LP;
-//   - the factor switches to dense storage only when the trailing block is 95 % full
-//     (CLP: 70 %): the packings' separators are sparse and the dense kernel wastes work
-//     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000;
-//   - A D A^T is formed by a scatter precomputed from A and the factor's pattern instead of
-//     CLP's row-by-row gather: per LP 0.183 -> 0.160 s at 2000 disks (max and min LPs of
-//     60 contacts), 1.63 -> 1.45 s at 8000 (4 contacts), the optima equal to 4e-11;
-//   - from kNestedDissectionMinRows rows of A on, the rows are ordered by METIS's nested
-//     dissection (dense rows, as the pressure row, last) instead of CLP's minimum degree.
-//     A packing's contact graph is nearly planar, where nested dissection needs the fewest
-//     operations as it grows: per LP 0.72 -> 0.63 s at 4000 disks (10 939 rows), 2.36 ->
-//     1.89 s at 8000 (21 829 rows); at 2000 disks (5410 rows) it is 2-12 % slower, at 500
-//     and 1000 within 10 %, so CLP's ordering stays below the threshold.
+// The factorisation is NormalEquationsCholesky (normal_equations.hpp), CLP's own with four
+// settings changed: shared analysis, a higher dense threshold, A D A^T by a precomputed
+// scatter, and METIS's nested dissection from kNestedDissectionMinRows rows on.
 //
 // CLP ends a solve optimal (status 0: the primal and dual objectives agree to the dual
 // tolerance, absolute) or leaves its loop without a verdict when the complementarity gap stops

@@ -57,9 +57,9 @@ std::vector<int> nested_dissection_order(const ClpMatrixBase& A, int rows) {
 }  // namespace
 
 NormalEquationsCholesky::NormalEquationsCholesky(std::unique_ptr<ClpCholeskyBase>* keep,
-                                                 int nested_dissection_rows, double go_dense)
+                                                 int nested_dissection_rows)
     : keep_(keep), nested_dissection_rows_(nested_dissection_rows) {
-  goDense_ = go_dense;
+  goDense_ = kGoDense;
 }
 
 int NormalEquationsCholesky::order(ClpInterior* model) {
