@@ -85,22 +85,26 @@ TEST(PowerLawFit, ExactProbesThroughTheAccumulator) {
   EXPECT_LT(fit.alpha_err, 1e-12);
 }
 
-TEST(PowerLawFit, DefaultWindowExcludesNearFieldAndPeriodicImages) {
-  // Mean diameter 0.4, cell 60 x 50: window [1.2, 12.5].
-  const FitWindow w = default_fit_window(Cell{60.0, 50.0}, 0.4);
+TEST(PowerLawFit, DefaultWindowIsOneDecadeFromTheFirstNeighbours) {
+  // Mean diameter 1.2, cell 60 x 50: window [1.2, 12] (10 d < L_min / 2 = 25).
+  const FitWindow w = default_fit_window(Cell{60.0, 50.0}, 1.2);
   EXPECT_DOUBLE_EQ(w.r_lo, 1.2);
-  EXPECT_EQ(w.r_hi, 12.5);
+  EXPECT_DOUBLE_EQ(w.r_hi, 12.0);
+  // A cell narrower than 20 d: capped at L_min / 2.
+  const FitWindow capped = default_fit_window(Cell{10.0, 8.0}, 1.2);
+  EXPECT_DOUBLE_EQ(capped.r_lo, 1.2);
+  EXPECT_EQ(capped.r_hi, 4.0);
 
   // Power law inside the window, something else in every bin that is not entirely inside.
   RadialProfile p = exact_profile(1.0, 1.1);
   std::vector<std::size_t> inside;
   for (std::size_t k = 0; k < p.size(); ++k) {
-    if (p.r_lo[k] >= 1.2 && p.r_hi[k] <= 12.5)
+    if (p.r_lo[k] >= 1.2 && p.r_hi[k] <= 12.0)
       inside.push_back(k);
     else
       p.d_mean[k] = 5.0 + k;  // near-field plateau / far-field image contamination
   }
-  // Edges r_k = 0.5 10^(k/10): r_4 = 1.256 is the first lower edge >= 1.2, r_14 = 12.56 > 12.5,
+  // Edges r_k = 0.5 10^(k/10): r_4 = 1.256 is the first lower edge >= 1.2, r_14 = 12.56 > 12,
   // so bins 4 .. 12 enter; bin 3 = [0.998, 1.256) and bin 13 = [9.98, 12.56) straddle the edges.
   ASSERT_EQ(inside.front(), 4u);
   ASSERT_EQ(inside.back(), 12u);
@@ -115,7 +119,7 @@ TEST(PowerLawFit, DefaultWindowExcludesNearFieldAndPeriodicImages) {
   p.count[5] = 0;
   EXPECT_EQ(fit_power_law(p, w).bins, 8);
   EXPECT_THROW(fit_power_law(p, FitWindow{1.2, 2.0}), Error);
-  EXPECT_THROW(fit_power_law(p, default_fit_window(Cell{8.0, 8.0}, 1.0)), Error);  // [3, 2]
+  EXPECT_THROW(fit_power_law(p, default_fit_window(Cell{2.0, 2.0}, 1.2)), Error);  // [1.2, 1]
 }
 
 // Noisy probes: per-probe amplitude 1 +- 0.5 and per-grain factor 1 +- 0.3 (uniform, mean 1,

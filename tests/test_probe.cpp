@@ -186,16 +186,25 @@ TEST(ProbeCampaign, SummaryRatioOfMeans) {
   }
   EXPECT_DOUBLE_EQ(sum.F_crit_over_F_cont, f_crit / f_cont);
   EXPECT_GT(sum.F_crit_over_F_cont, 1.3);  // the paper's mu = 0.1 peak: clearly above 1
-  EXPECT_FALSE(sum.has_fit);               // 50 disks: the default fit window is empty
-  EXPECT_FALSE(sum.fit_error.empty());
-  // An explicit window: the fit uses only bins inside it.
+  // The default window [<2R>, min(10 <2R>, L/2)]: at 50 disks capped at L/2.
+  const FitWindow w = default_fit_window(p.cell, 2.0 * p.mean_radius());
+  ASSERT_EQ(w.r_hi, 0.5 * std::min(p.cell.Lx, p.cell.Ly));
+  ASSERT_TRUE(sum.has_fit) << sum.fit_error;
+  EXPECT_GE(sum.fit.r_lo, w.r_lo);
+  EXPECT_LE(sum.fit.r_hi, w.r_hi);
+  EXPECT_GE(sum.fit.bins, 2);
+  EXPECT_TRUE(std::isfinite(sum.fit.alpha));
+  EXPECT_GT(sum.fit.alpha_err, 0.0);
+  // An explicit window: the fit uses only bins inside it; one without bins gives no alpha
+  // and says why.
   const CampaignSummary in_window = summarize(p, st, FitWindow{1.0, 5.0});
   ASSERT_TRUE(in_window.has_fit) << in_window.fit_error;
   EXPECT_GE(in_window.fit.r_lo, 1.0);
   EXPECT_LE(in_window.fit.r_hi, 5.0);
-  EXPECT_GE(in_window.fit.bins, 2);
-  EXPECT_TRUE(std::isfinite(in_window.fit.alpha));
-  EXPECT_GT(in_window.fit.alpha_err, 0.0);
+  EXPECT_NE(in_window.fit.bins, sum.fit.bins);
+  const CampaignSummary empty = summarize(p, st, FitWindow{1.0, 1.1});
+  EXPECT_FALSE(empty.has_fit);
+  EXPECT_NE(empty.fit_error.find("need at least 2"), std::string::npos) << empty.fit_error;
 }
 
 }  // namespace

@@ -253,7 +253,7 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
   cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")->capture_default_str();
   cmd->add_option("--fit-window", o->fit_window,
-                  "r_lo r_hi of the power-law fit of d(r) (R_max; default [3 <2R>, L/4])")
+                  "r_lo r_hi of the power-law fit of d(r) (R_max; default [<2R>, min(10 <2R>, L/2)])")
       ->expected(2);
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
   cmd->callback([o] { run(*o); });

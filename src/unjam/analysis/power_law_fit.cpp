@@ -55,7 +55,7 @@ std::uint64_t uniform_below(std::mt19937_64& rng, std::uint64_t n) {
 }  // namespace
 
 FitWindow default_fit_window(const Cell& cell, double mean_diameter) {
-  return {3.0 * mean_diameter, 0.25 * std::min(cell.Lx, cell.Ly)};
+  return {mean_diameter, std::min(10.0 * mean_diameter, 0.5 * std::min(cell.Lx, cell.Ly))};
 }
 
 std::vector<std::size_t> fit_bins(const RadialProfile& profile, FitWindow window) {

@@ -6,12 +6,15 @@
 // (the bins are logarithmic, so every decade of r weighs the same).
 //
 // Window: a bin enters if it lies entirely inside [r_lo, r_hi] (r_lo <= bin's lower edge,
-// bin's upper edge <= r_hi) and has count > 0 and d_mean > 0. The default window is
-//   r_lo = 3 mean grain diameters  (the near field, where single grains and the probed pair
-//                                   dominate, is left out),
-//   r_hi = L_min / 4               (the nearest periodic image of the probe, at distance L,
-//                                   is >= 3 r away, and the minimum-image square, which cuts
-//                                   the circles of radius r > L_min/2, is not reached).
+// bin's upper edge <= r_hi) and has count > 0 and d_mean > 0. The default window is one
+// decade from the first shell of neighbours, as far as the cell allows:
+//   r_lo = 1 mean grain diameter d    (inside it lie only the probed pair's own grains),
+//   r_hi = min(10 d, L_min / 2)       (beyond L_min / 2 the minimum-image square cuts the
+//                                      circles of radius r).
+// The profile is not straight on log-log axes: its local slope grows from ~1 at r ~ 3 d to
+// 1.6-2 beyond r ~ 5 d, at 2000 and 8000 disks alike (docs/probe.md), so alpha depends on
+// the window. One decade from d is what the paper's smallest packings allow (500 disks:
+// L_min / 2 ~ 10 d), so the window is the same at every size from 500 disks on.
 //
 // Error: bootstrap over probes. Resample the P probes with replacement (P draws, seeded
 // std::mt19937_64, indices by rejection sampling, so identical on every platform), pool their
@@ -31,7 +34,8 @@ struct FitWindow {
   double r_hi = 0.0;
 };
 
-// [3 mean_diameter, min(Lx, Ly) / 4]; may be empty in a small cell (the fit then throws).
+// [mean_diameter, min(10 mean_diameter, min(Lx, Ly) / 2)]; holds fewer than two bins only in
+// a cell a few diameters wide (the fit then throws).
 FitWindow default_fit_window(const Cell& cell, double mean_diameter);
 
 struct PowerLawFit {
