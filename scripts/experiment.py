@@ -69,10 +69,6 @@ FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
 FIG1_MU = 0.5
 COLUMNS = ["mu", "N", "seed", "phi", "z", "F_cont_over_F0", "F_crit_over_F_cont", "alpha",
            "alpha_err"]
-# The default fit window of `unjam probe` (default_fit_window, src/unjam/analysis/
-# power_law_fit.hpp). The probe stages record it, so that cached probes are computed again
-# when the rule changes: alpha depends on it, and the binary's version does not say so.
-FIT_WINDOW_RULE = "[<2R>, min(10 <2R>, L_min/2)]"
 PROBE_OUTPUTS = ["probes.csv", "response_field.csv", "response_profile.csv",
                  "probe_summary.json", "probe_checkpoint.json"]
 
@@ -248,8 +244,7 @@ def probe_stage(R, name, d, g, sample, dep):
     """`unjam probe --all`, or `--sample K` (seeded, K per packing) when sample > 0."""
     select = ["--sample", str(sample)] if sample else ["--all"]
     args = select + ["--method", "lp", "--g", repr(g)]
-    params = {"command": ["unjam", "probe", d] + args, "version": R.version,
-              "fit_window": FIT_WINDOW_RULE}
+    params = {"command": ["unjam", "probe", d] + args, "version": R.version}
 
     def run(st):
         if not st.resume:     # other parameters: no stale checkpoint or outputs
