@@ -6,6 +6,7 @@ packages=(
   libeigen3-dev coinor-libclp-dev libmetis-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
+  python3-siconos
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -10,6 +10,7 @@
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
 #include "unjam/probe/probe_campaign.hpp"
@@ -74,6 +75,31 @@ TEST(Probe, FrictionlessCriticalForceEqualsTheContactForce) {
     EXPECT_NEAR(extrapolated / a.f_cont, 1.0, 1e-3) << "contact " << k;
   }
   EXPECT_EQ(probed, 2);
+}
+
+TEST(Probe, ExactStepReachesTheQuasiStaticLimitAtLargeDt) {
+  // mu = 0, isostatic: the exact step's F_crit exceeds F_cont by the inertial term c / dt^2
+  // exactly (halving dt quadruples it), equals the converged NLGS probe, and at dt = 0.1 the
+  // inertial term is 1e-4 of the dt = 1e-3 one: F_crit = F_cont, the quasi-static limit.
+  // (The dense LCP loses digits like dt^2: at dt = 1 its residual is ~5e-5 g, docs/probe.md.)
+  const Packing& p = isostatic_packing();
+  int k = 0;
+  while (p.contacts[k].fn < 0.5 * p.force_unit()) ++k;
+  ProbeSettings fine, coarse, quasi_static;
+  coarse.dt = 2.0 * fine.dt;
+  quasi_static.dt = 0.1;
+  const CdStepSolution a = probe_cd_lemke(p, k, fine), b = probe_cd_lemke(p, k, coarse),
+                       c = probe_cd_lemke(p, k, quasi_static);
+  ASSERT_TRUE(a.result.converged && b.result.converged && c.result.converged);
+  const double f_cont = p.contacts[k].fn;
+  const double excess_a = a.result.f_crit / f_cont - 1.0, excess_b = b.result.f_crit / f_cont - 1.0;
+  EXPECT_GT(excess_b, 1e-4);
+  EXPECT_NEAR(excess_a / excess_b, 4.0, 1e-3);
+  EXPECT_NEAR(c.result.f_crit / f_cont, 1.0, 2e-5);
+  EXPECT_NEAR((c.result.f_crit / f_cont - 1.0) / excess_a, 1e-4, 2e-5);
+  const ProbeResult nlgs = probe_nlgs(p, k, fine);
+  ASSERT_TRUE(nlgs.converged);
+  EXPECT_NEAR(a.result.f_crit / nlgs.f_crit, 1.0, 1e-4);
 }
 
 TEST(Probe, CriticalForceReachesButNeverExceedsTheLpMaximum) {

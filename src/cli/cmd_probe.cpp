@@ -17,6 +17,7 @@
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 #include "unjam/protocol/compaction.hpp"
 #include "unjam/protocol/gas.hpp"
@@ -28,7 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ProbeOptions {
-  std::string dir, out, method = "lp", displacement = "peculiar";
+  std::string dir, out, method = "lp", displacement = "peculiar", export_problem;
   int contact = -1;
   bool all = false;
   int sample = 0;
@@ -47,12 +48,11 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   GasSettings gas;
   from_json(p.meta.settings, cs, gas);
   CampaignSettings s;
-  if (o.method != "lp" && o.method != "nlgs") throw Error("--method must be lp or nlgs");
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
   if (!(o.g > 0.0) || !(o.dt > 0.0) || !(o.velocity_tol > 0.0))
     throw Error("--g, --dt and --velocity-tol must be positive");
-  s.method = o.method == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
+  s.method = method_from_name(o.method);
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -88,16 +88,33 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
   return w.str();
 }
 
+// The exact step also writes its contact forces (probe-K-forces.csv), so that the solution
+// can be checked by anyone.
+ProbeResult probe_lemke_with_forces(const Packing& p, const CampaignSettings& s, int contact,
+                                    const fs::path& out) {
+  const CdStepSolution sol = probe_cd_lemke(p, contact, s.nlgs);
+  if (sol.f.size() > 0)
+    write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
+                      step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
+  return sol.result;
+}
+
 void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
+  if (!o.export_problem.empty()) {
+    write_siconos_problem(build_cd_step(p, o.contact, s.nlgs), o.export_problem);
+    std::printf("step problem of contact %d written to %s (Siconos frictional contact format)\n",
+                o.contact, o.export_problem.c_str());
+  }
   const auto t0 = std::chrono::steady_clock::now();
-  const ProbeResult r = probe_contact(p, s, o.contact);
+  const ProbeResult r = s.method == ProbeMethod::kLemke ? probe_lemke_with_forces(p, s, o.contact, out)
+                                                        : probe_contact(p, s, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
   std::printf("contact %d (grains %d-%d), method %s\n", r.contact, r.a, r.b, o.method.c_str());
   std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
               r.f_crit / F0, r.f_crit / r.f_cont);
-  std::printf("  converged %s  sweeps %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
+  std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
@@ -214,6 +231,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
 void run(const ProbeOptions& o) {
   const int modes = (o.contact >= 0) + o.all + (o.sample > 0);
   if (modes != 1) throw Error("give exactly one of --contact K, --all, --sample K");
+  if (!o.export_problem.empty() && o.contact < 0) throw Error("--export-problem goes with --contact K");
   const Packing p = read_packing(o.dir);
   if (!p.state.is_static)
     std::fprintf(stderr, "warning: %s is not marked static (its compaction did not finish)\n", o.dir.c_str());
@@ -242,10 +260,14 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str();
   cmd->add_option("--method", o->method,
                   "lp: F_crit as the LP maximum and the kinematic field at its optimum (fast); "
-                  "nlgs: the paper's contact-dynamics probe (reference, slow)")->capture_default_str();
+                  "nlgs: the paper's contact-dynamics probe (reference, slow); "
+                  "lemke: the same step solved exactly by Lemke's method (dense, up to ~1200 contacts)")
+      ->capture_default_str();
+  cmd->add_option("--export-problem", o->export_problem,
+                  "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
   cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str();
-  cmd->add_option("--dt", o->dt, "nlgs: time step of the probe")->capture_default_str();
+  cmd->add_option("--dt", o->dt, "nlgs, lemke: time step of the probe")->capture_default_str();
   cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")->capture_default_str();
   cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str();
   cmd->add_option("--displacement", o->displacement,

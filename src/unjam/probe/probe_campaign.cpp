@@ -10,6 +10,7 @@
 
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/probe/cd_step.hpp"
 
 namespace unjam {
 namespace {
@@ -24,6 +25,7 @@ struct Worker {
   std::unique_ptr<KinematicProbe> kinematic;
   ProbeResult probe(const Packing& p, const CampaignSettings& s, int contact) {
     if (s.method == ProbeMethod::kNlgs) return probe_nlgs(p, contact, s.nlgs);
+    if (s.method == ProbeMethod::kLemke) return probe_cd_lemke(p, contact, s.nlgs).result;
     if (!kinematic) kinematic = std::make_unique<KinematicProbe>(p, s.kinematic);
     return kinematic->probe(contact);
   }
@@ -52,6 +54,21 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
 
 }  // namespace
 
+const char* method_name(ProbeMethod method) {
+  switch (method) {
+    case ProbeMethod::kLp: return "lp";
+    case ProbeMethod::kNlgs: return "nlgs";
+    case ProbeMethod::kLemke: return "lemke";
+  }
+  return "?";
+}
+
+ProbeMethod method_from_name(const std::string& name) {
+  for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke})
+    if (name == method_name(m)) return m;
+  throw Error("--method must be lp, nlgs or lemke (got '" + name + "')");
+}
+
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
   std::vector<int> targets;
   const double f_min = s.force_threshold * p.force_unit();
@@ -75,8 +92,10 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
                   const CampaignHooks& hooks) {
   const std::vector<int> all = campaign_targets(p, s);
   std::vector<int> todo;
+  std::vector<char> listed(p.contacts.size(), 0);
+  for (const ProbeRow& r : state.rows) listed[r.contact] = 1;
   for (const int k : all)
-    if (!state.average.has_probe(k)) todo.push_back(k);
+    if (!state.average.has_probe(k) && !listed[k]) todo.push_back(k);
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   const int threads = omp_get_max_threads();
   std::vector<Worker> workers(threads);
@@ -98,7 +117,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
     }
     for (int j = 0; j < n; ++j) {
       if (!results[j]) throw Error("probe of contact " + std::to_string(todo[start + j]) + ": " + errors[j]);
-      add_to_average(p, s, loaded, *results[j], state.average);
+      if (results[j]->residual != kNoSolution) add_to_average(p, s, loaded, *results[j], state.average);
       state.rows.push_back(row_of(*results[j]));
     }
     std::sort(state.rows.begin(), state.rows.end(),
@@ -114,13 +133,16 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state,
   CampaignSummary sum;
   sum.probes = static_cast<int>(state.rows.size());
   double f_cont = 0.0, f_crit = 0.0;
+  int solved = 0;
   for (const ProbeRow& r : state.rows) {
+    if (!r.converged) ++sum.not_converged;
+    if (r.residual == kNoSolution) continue;
+    ++solved;
     f_cont += r.f_cont;
     f_crit += r.f_crit;
-    if (!r.converged) ++sum.not_converged;
   }
-  if (sum.probes > 0) {
-    sum.F_cont_over_F0 = f_cont / sum.probes / p.force_unit();
+  if (solved > 0) {
+    sum.F_cont_over_F0 = f_cont / solved / p.force_unit();
     sum.F_crit_over_F_cont = f_crit / f_cont;
   }
   try {
@@ -137,7 +159,7 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state,
 nlohmann::json to_json(const CampaignSettings& s) {
   const bool lp = s.method == ProbeMethod::kLp;
   nlohmann::json j = {
-      {"method", lp ? "lp" : "nlgs"},
+      {"method", method_name(s.method)},
       {"g", lp ? s.kinematic.g : s.nlgs.g},
       {"touch_gap", lp ? s.kinematic.touch_gap : s.nlgs.touch_gap},
       {"displacement", s.total_displacement ? "total" : "peculiar"},
@@ -150,9 +172,11 @@ nlohmann::json to_json(const CampaignSettings& s) {
     j["M_lambda"] = s.kinematic.M_lambda;
   } else {
     j["dt"] = s.nlgs.dt;
-    j["velocity_tol"] = s.nlgs.velocity_tol;
-    j["max_sweeps"] = s.nlgs.max_sweeps;
     j["M_lambda"] = s.nlgs.bath.M_lambda;
+    if (s.method == ProbeMethod::kNlgs) {
+      j["velocity_tol"] = s.nlgs.velocity_tol;
+      j["max_sweeps"] = s.nlgs.max_sweeps;
+    }
   }
   return j;
 }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -22,11 +23,16 @@ namespace unjam {
 enum class ProbeMethod {
   kLp,    // F_crit = LP maximum, field = kinematic problem at the optimum (fast)
   kNlgs,  // the paper's contact-dynamics probe (reference, slow)
+  kLemke, // the same step solved exactly by Lemke's method (dense: small packings)
 };
+
+// "lp", "nlgs", "lemke"; method_from_name throws unjam::Error for any other name.
+const char* method_name(ProbeMethod method);
+ProbeMethod method_from_name(const std::string& name);
 
 struct CampaignSettings {
   ProbeMethod method = ProbeMethod::kLp;
-  ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS probe
+  ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS and Lemke probes
   KinematicProbeSettings kinematic;     // g, LP and state tolerances of the fast probe
   bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
   double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
@@ -59,7 +65,7 @@ struct CampaignHooks {
 
 struct CampaignSummary {
   int probes = 0;
-  int not_converged = 0;
+  int not_converged = 0;             // with the probes that found no solution (not in the means)
   double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probed contacts
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
   bool has_fit = false;

@@ -1,5 +1,6 @@
 #pragma once
 // What a local perturbation probe measures (PHYSICS.md section 6).
+#include <limits>
 #include <vector>
 
 #include "unjam/core/vec2.hpp"
@@ -23,6 +24,10 @@ struct ProbeResult {
   double residual = 0.0;
   int violations = 0;          // lp: unilateral conditions its field still breaks
 };
+
+// The residual of a probe whose solver found no solution (lemke: its path ended on a ray).
+// Such a probe has no F_crit and no field: campaigns list it but leave it out of the means.
+inline constexpr double kNoSolution = std::numeric_limits<double>::max();
 
 // Normal opening of packing.contacts[k] over the probe: (u_b - u_a) . n + lambda dt |l|
 // (the cell's affine strain stretches the branch vector l; length units). The probed pair

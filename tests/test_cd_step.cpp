@@ -1,0 +1,180 @@
+// The exact probe step (probe/cd_step, core/lemke; docs/probe.md, "The exact step"): Lemke's
+// method on small LCPs with known solutions, the step's residual check, the exact solution
+// against an independent complementarity solver (tests/fixtures/p50-mu1/cd-reference.csv)
+// and against the converged NLGS probe.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include "unjam/core/error.hpp"
+#include "unjam/core/lemke.hpp"
+#include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_step.hpp"
+#include "unjam/probe/nlgs_probe.hpp"
+
+namespace unjam {
+namespace {
+
+const Packing& fixture(const std::string& name) {
+  static std::map<std::string, Packing> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, read_packing(std::string(UNJAM_FIXTURES_DIR) + "/" + name)).first;
+  return it->second;
+}
+
+// contact -> F_crit of the solution reached from the static state (simulation units).
+std::map<int, double> cd_reference() {
+  std::ifstream in(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu1/cd-reference.csv");
+  std::map<int, double> ref;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line[0] == 'c') continue;
+    std::istringstream row(line);
+    std::string k, f;
+    std::getline(row, k, ',');
+    std::getline(row, f, ',');
+    ref[std::stoi(k)] = std::stod(f);
+  }
+  return ref;
+}
+
+TEST(Lemke, SolvesSmallLcpsExactly) {
+  // M positive definite: the unique solution of w = M z + q, z = M^-1 (-q) where all > 0.
+  Eigen::MatrixXd M(2, 2);
+  M << 2, 1, 1, 2;
+  Eigen::VectorXd q(2);
+  q << -5, -4;  // z = (2, 1), w = 0
+  LemkeResult r = solve_lcp_lemke(M, q);
+  ASSERT_EQ(r.z.size(), 2);
+  EXPECT_NEAR(r.z[0], 2.0, 1e-14);
+  EXPECT_NEAR(r.z[1], 1.0, 1e-14);
+  // One variable at zero: q = (-2, 3): z = (1, 0), w = (0, 4).
+  q << -2, 3;
+  r = solve_lcp_lemke(M, q);
+  EXPECT_NEAR(r.z[0], 1.0, 1e-14);
+  EXPECT_EQ(r.z[1], 0.0);
+  // q >= 0: z = 0 without a pivot.
+  q << 1, 0;
+  r = solve_lcp_lemke(M, q);
+  EXPECT_EQ(r.pivots, 0);
+  EXPECT_EQ(r.z.norm(), 0.0);
+  // Infeasible: w = -z - 1 can never be >= 0: Lemke ends on a ray.
+  Eigen::MatrixXd neg = -Eigen::MatrixXd::Identity(1, 1);
+  Eigen::VectorXd one = -Eigen::VectorXd::Ones(1);
+  r = solve_lcp_lemke(neg, one);
+  EXPECT_TRUE(r.ray);
+  EXPECT_EQ(r.z.size(), 0);
+  EXPECT_THROW(solve_lcp_lemke(Eigen::MatrixXd::Identity(2, 3), q), Error);
+  EXPECT_THROW(solve_lcp_lemke(M, q, Eigen::VectorXd::Zero(2)), Error);
+}
+
+TEST(CdStep, StaticNetworkSolvesTheUnperturbedStep) {
+  // A f0 = b: the static forces leave every pair where it is, so the only violation is the
+  // probed pair, which fails to open by g (penetration exactly 1 g).
+  const Packing& p = fixture("p50-mu1");
+  const CdStepProblem pb = build_cd_step(p, 1, ProbeSettings{});
+  Eigen::VectorXd f0(2 * pb.num_contacts());
+  for (int k = 0; k < pb.num_contacts(); ++k) {
+    f0[2 * k] = p.contacts[k].fn;
+    f0[2 * k + 1] = p.contacts[k].ft;
+  }
+  const CdStepResidual r = cd_step_residual(pb, f0);
+  EXPECT_NEAR(r.penetration, 1.0, 1e-6);
+  EXPECT_LT(r.coulomb, 1e-9);
+  EXPECT_LT(r.sticking_slip, 1e-6);
+  EXPECT_LT(r.sliding_direction, 1e-6);
+  // W is symmetric positive semidefinite (A^T M^-1 A).
+  const Eigen::MatrixXd W = pb.delassus();
+  EXPECT_LT((W - W.transpose()).cwiseAbs().maxCoeff(), 1e-12 * W.cwiseAbs().maxCoeff());
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(W).eigenvalues().minCoeff(),
+            -1e-10 * W.cwiseAbs().maxCoeff());
+  EXPECT_THROW(build_cd_step(p, pb.num_contacts(), ProbeSettings{}), Error);
+}
+
+TEST(CdStep, LemkeMatchesTheIndependentComplementaritySolver) {
+  // Four contacts of p50-mu1 (g = 1e-9, dt = 1e-3): Lemke's solution is exact (residual
+  // ~1e-10 g) and equals the reference's solution from the static state to ~1e-13; for
+  // contacts 5 and 6, which have other exact solutions (2.2454 and 2.2438), too.
+  const Packing& p = fixture("p50-mu1");
+  for (const auto& [k, f_ref] : cd_reference()) {
+    const CdStepSolution s = probe_cd_lemke(p, k, ProbeSettings{});
+    ASSERT_TRUE(s.result.converged) << "contact " << k;
+    EXPECT_LT(s.residual.max(), kExactStepTolerance) << "contact " << k;
+    EXPECT_NEAR(s.result.f_crit / f_ref, 1.0, 1e-9) << "contact " << k;
+    EXPECT_GT(s.result.sweeps, 0);
+    // The field opens the probed pair by g.
+    EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-9) << "contact " << k;
+  }
+}
+
+TEST(CdStep, APerturbedSolutionFailsTheResidualCheck) {
+  const Packing& p = fixture("p50-mu1");
+  const ProbeSettings set;
+  const CdStepSolution s = probe_cd_lemke(p, 1, set);
+  ASSERT_TRUE(s.result.converged);
+  const CdStepProblem pb = build_cd_step(p, 1, set);
+  const double F0 = p.force_unit();
+  int loaded = -1, open = -1;
+  for (int k = 0; k < pb.num_contacts() && (loaded < 0 || open < 0); ++k) {
+    if (k != 1 && s.f[2 * k] > 0.1 * F0 && loaded < 0) loaded = k;
+    if (s.f[2 * k] == 0.0 && open < 0) open = k;
+  }
+  ASSERT_GE(loaded, 0);
+  ASSERT_GE(open, 0);
+  // A 1e-3 F0 change of one loaded contact's normal force moves grains by ~1e-3 dt^2 / m,
+  // far above 1e-6 g; pushing an open pair outside the cone breaks Coulomb's law.
+  Eigen::VectorXd f = s.f;
+  f[2 * loaded] += 1e-3 * F0;
+  EXPECT_GT(cd_step_residual(pb, f).max(), 1e3 * kExactStepTolerance);
+  f = s.f;
+  f[2 * open + 1] = 1e-3 * F0;
+  EXPECT_GT(cd_step_residual(pb, f).coulomb, 1e-4);
+}
+
+TEST(CdStep, LemkeAgreesWithConvergedNlgs) {
+  // p50-mu0.1, contact 1: the same F_crit and field as the converged NLGS probe
+  // (measured: F_crit equal to 6 digits, field cosine 1 - 2e-10).
+  const Packing& p = fixture("p50-mu0.1");
+  const ProbeSettings set;
+  const CdStepSolution exact = probe_cd_lemke(p, 1, set);
+  const ProbeResult nlgs = probe_nlgs(p, 1, set);
+  ASSERT_TRUE(exact.result.converged && nlgs.converged);
+  EXPECT_NEAR(exact.result.f_crit / nlgs.f_crit, 1.0, 1e-5);
+  double dot = 0.0, na = 0.0, nb = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    dot += exact.result.u[i].dot(nlgs.u[i]);
+    na += exact.result.u[i].squaredNorm();
+    nb += nlgs.u[i].squaredNorm();
+  }
+  EXPECT_GT(dot / std::sqrt(na * nb), 0.999);
+}
+
+TEST(CdStep, ExportsTheStepInSiconosFormat) {
+  const Packing& p = fixture("p50-mu1");
+  const CdStepProblem pb = build_cd_step(p, 5, ProbeSettings{});
+  const std::string file = ::testing::TempDir() + "/unjam-cd-step.dat";
+  write_siconos_problem(pb, file);
+  std::ifstream in(file);
+  int dim = 0, nc = 0, storage = -1, rows = 0, cols = 0;
+  in >> dim >> nc >> storage >> rows >> cols;
+  EXPECT_EQ(dim, 2);
+  EXPECT_EQ(nc, pb.num_contacts());
+  EXPECT_EQ(storage, 0);
+  EXPECT_EQ(rows, 2 * nc);
+  EXPECT_EQ(cols, 2 * nc);
+  int r2 = 0, c2 = 0;
+  in >> r2 >> c2;
+  const Eigen::MatrixXd W = pb.delassus();
+  double w00 = 0.0;
+  in >> w00;
+  EXPECT_EQ(w00, W(0, 0));  // %.17g round-trips exactly
+}
+
+}  // namespace
+}  // namespace unjam
