@@ -5,6 +5,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev coinor-libclp-dev libmetis-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
+  libopenmpi-dev openmpi-bin
   python3 python3-matplotlib python3-numpy
   python3-siconos
 )

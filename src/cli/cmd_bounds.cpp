@@ -2,7 +2,10 @@
 // the admissible force networks (PHYSICS.md section 7, docs/ensemble.md), by LP.
 // Writes DIR/bounds.csv (a,b,fn,fn_min,fn_max; 17 significant digits, force units of the
 // packing) and DIR/bounds.json (dimension, rank, contacts, timings, parameters, version).
+#include <omp.h>
+
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +16,8 @@
 
 #include "cli/commands.hpp"
 #include "cli/run_info.hpp"
+#include "cli/shards.hpp"
+#include "unjam/campaign/distributor.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
@@ -30,29 +35,26 @@ struct BoundsOptions {
   double fn_tol = 1e-9;     // force-carrying: fn > fn_tol F0
   int threads = 0;          // 0: all cores
   std::string method = "barrier";
+  std::string shard;        // "i/K": this job's share of a job array
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-void run_bounds(const BoundsOptions& opt) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const Packing packing = read_packing(opt.dir);
-  const EquilibriumSystem sys =
-      build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
-  const double t_build = seconds_since(t_start);
-  const auto t_rank = std::chrono::steady_clock::now();
-  const RankInfo rank = equilibrium_rank(sys);
-  const double rank_seconds = seconds_since(t_rank);
+// What bounds.json records of how the intervals were computed.
+struct BoundsRun {
+  double t_build = 0.0, t_rank = 0.0, t_total = 0.0;
+  std::vector<RankLoad> loads;
+};
 
+ForceBoundsOptions lp_options(const BoundsOptions& opt, int Nc) {
   ForceBoundsOptions lp;
   lp.threads = thread_count(opt.threads);
   lp.method = opt.method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
-  const int Nc = sys.num_contacts();
   if (Nc >= 500) {
     int next_report = 0;
-    lp.progress = [&next_report, t_lp = std::chrono::steady_clock::now()](int done, int total) {
+    lp.progress = [next_report, t_lp = std::chrono::steady_clock::now()](int done, int total) mutable {
       if (done < next_report && done < total) return;
       next_report = done + std::max(1, total / 20);
       const double t = seconds_since(t_lp);
@@ -61,8 +63,21 @@ void run_bounds(const BoundsOptions& opt) {
                    done > 0 ? format_duration(t * (total - done) / done).c_str() : "?");
     };
   }
-  const ForceBounds bounds = compute_force_bounds(sys, lp);
+  return lp;
+}
 
+nlohmann::ordered_json loads_json(const std::vector<RankLoad>& loads) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::array();
+  for (const RankLoad& l : loads)
+    j.push_back({{"rank", l.rank}, {"threads", l.threads}, {"lps", l.tasks}, {"busy_seconds", l.busy_seconds}});
+  return j;
+}
+
+// bounds.csv, bounds.json and the report.
+void write_bounds(const BoundsOptions& opt, const Packing& packing, const EquilibriumSystem& sys,
+                  const RankInfo& rank, const ForceBounds& bounds, const ForceBoundsOptions& lp,
+                  const BoundsRun& run) {
+  const int Nc = sys.num_contacts();
   std::string csv = "a,b,fn,fn_min,fn_max\n";
   double sum_width = 0.0, sum_fn = 0.0;
   char line[160];
@@ -81,9 +96,9 @@ void run_bounds(const BoundsOptions& opt) {
   json_path.replace_extension(".json");
   write_file_atomic(csv_path, csv);
 
-  const double total = seconds_since(t_start);
   const nlohmann::ordered_json j = {
       {"program_version", kVersion},
+      {"command", command_line()},
       {"packing", opt.dir},
       {"N", packing.size()},
       {"mu", sys.mu},
@@ -105,8 +120,9 @@ void run_bounds(const BoundsOptions& opt) {
       {"iterations", bounds.iterations},
       {"lps_at_looser_tolerance", bounds.loosened_solves},
       {"timings_s",
-       {{"read_and_build", t_build}, {"rank", rank_seconds}, {"lp", bounds.seconds},
-        {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", total}}},
+       {{"read_and_build", run.t_build}, {"rank", run.t_rank}, {"lp", bounds.seconds},
+        {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", run.t_total}}},
+      {"ranks", loads_json(run.loads)},
   };
   write_file_atomic(json_path, j.dump(2) + "\n");
 
@@ -121,7 +137,56 @@ void run_bounds(const BoundsOptions& opt) {
                 bounds.loosened_solves);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
+  if (run.loads.size() > 1)
+    for (const RankLoad& l : run.loads)
+      std::printf("  rank %d: %lld LPs, %s busy (%d threads)\n", l.rank, l.tasks,
+                  format_duration(l.busy_seconds).c_str(), l.threads);
   std::printf("wrote              %s, %s\n", csv_path.string().c_str(), json_path.string().c_str());
+}
+
+// A finished shard: the intervals of its contacts (k mod K = i) and its counts.
+void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const ForceBounds& b,
+                        const BoundsRun& run) {
+  nlohmann::json contacts = nlohmann::json::array(), fn_min = contacts, fn_max = contacts;
+  for (Eigen::Index k = shard; k < b.fn_max.size(); k += shards) {
+    contacts.push_back(k);
+    fn_min.push_back(b.fn_min[k]);
+    fn_max.push_back(b.fn_max[k]);
+  }
+  const std::filesystem::path dir = opt.out.empty() ? std::filesystem::path(opt.dir)
+                                                    : std::filesystem::path(opt.out).parent_path();
+  const nlohmann::json j = {
+      {"options", {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}}},
+      {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max},
+      {"min_lps_skipped", b.min_lps_skipped}, {"iterations", b.iterations},
+      {"loosened_solves", b.loosened_solves}, {"lp_seconds", b.seconds},
+      {"busy_seconds", run.loads.at(0).busy_seconds}, {"command", command_line()}};
+  const std::filesystem::path file = dir / shard_file_name("bounds_shard", shard, shards);
+  write_file_atomic(file, j.dump());
+  std::printf("shard %d/%d: %zu contacts -> %s (merge the shards with `unjam merge`)\n", shard,
+              shards, contacts.size(), file.c_str());
+}
+
+void run_bounds(const BoundsOptions& opt) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const auto [shard, shards] = opt.shard.empty() ? std::pair{0, 1} : parse_shard(opt.shard);
+  omp_set_num_threads(thread_count(opt.threads));
+  const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
+  const Packing packing = read_packing(opt.dir);
+  const EquilibriumSystem sys =
+      build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
+  BoundsRun run;
+  run.t_build = seconds_since(t_start);
+  const ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
+  const ForceBounds bounds = compute_force_bounds(sys, lp, *dist);
+  if (!dist->gathers()) return;
+  run.loads = dist->loads();
+  if (shards > 1) return write_bounds_shard(opt, shard, shards, bounds, run);
+  const auto t_rank = std::chrono::steady_clock::now();
+  const RankInfo rank = equilibrium_rank(sys);
+  run.t_rank = seconds_since(t_rank);
+  run.t_total = seconds_since(t_start);
+  write_bounds(opt, packing, sys, rank, bounds, lp, run);
 }
 
 }  // namespace
@@ -140,7 +205,52 @@ void add_bounds_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
       ->check(CLI::IsMember({"barrier", "simplex"}));
+  cmd->add_option("--shard", opt->shard,
+                  "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
+                  "joins the K shards into bounds.csv and bounds.json)");
   cmd->callback([opt] { run_bounds(*opt); });
+}
+
+bool merge_bounds_shards(const std::string& dir, const std::string& out) {
+  BoundsOptions opt;
+  opt.dir = dir;
+  const std::vector<nlohmann::json> shards = read_shards(out.empty() ? dir : out, "bounds_shard");
+  if (shards.empty()) return false;
+  const nlohmann::json& first = shards.front();
+  opt.gap_tol = first.at("options").at("gap_tol").get<double>();
+  opt.fn_tol = first.at("options").at("fn_tol").get<double>();
+  opt.method = first.at("options").at("method").get<std::string>();
+  opt.out = first.at("options").at("out").get<std::string>();
+  const auto t_start = std::chrono::steady_clock::now();
+  const Packing packing = read_packing(dir);
+  const EquilibriumSystem sys =
+      build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
+  ForceBounds bounds;
+  bounds.fn_min = bounds.fn_max = Eigen::VectorXd::Constant(sys.num_contacts(), std::nan(""));
+  BoundsRun run;
+  for (const nlohmann::json& j : shards) {
+    if (j.at("options") != first.at("options"))
+      throw Error("the bounds shards in " + dir + " come from runs with other settings");
+    const auto contacts = j.at("contacts").get<std::vector<int>>();
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      if (contacts[i] >= sys.num_contacts()) throw Error("bounds shard of another packing in " + dir);
+      bounds.fn_min[contacts[i]] = j.at("fn_min").at(i).get<double>();
+      bounds.fn_max[contacts[i]] = j.at("fn_max").at(i).get<double>();
+    }
+    bounds.min_lps_skipped += j.at("min_lps_skipped").get<int>();
+    bounds.iterations += j.at("iterations").get<long long>();
+    bounds.loosened_solves += j.at("loosened_solves").get<long long>();
+    bounds.seconds = std::max(bounds.seconds, j.at("lp_seconds").get<double>());
+    run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
+                         j.at("busy_seconds").get<double>()});
+  }
+  if (bounds.fn_max.hasNaN()) throw Error("the bounds shards in " + dir + " do not cover every contact");
+  const auto t_rank = std::chrono::steady_clock::now();
+  const RankInfo rank = equilibrium_rank(sys);
+  run.t_rank = seconds_since(t_rank);
+  run.t_total = seconds_since(t_start);
+  write_bounds(opt, packing, sys, rank, bounds, lp_options(opt, 0), run);
+  return true;
 }
 
 }  // namespace unjam::cli

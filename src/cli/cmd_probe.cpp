@@ -11,7 +11,9 @@
 
 #include "cli/commands.hpp"
 #include "cli/run_info.hpp"
+#include "cli/shards.hpp"
 #include "unjam/analysis/packing_stats.hpp"
+#include "unjam/campaign/distributor.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
@@ -40,6 +42,8 @@ struct ProbeOptions {
   double checkpoint_s = 30.0;
   std::vector<double> fit_window;  // [r_lo, r_hi], empty: the default rule
   bool quiet = false;
+  std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
+  int stop_after = 0;              // > 0: stop (checkpoint saved) after this many new probes
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -127,9 +131,28 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
   return FitWindow{o.fit_window[0], o.fit_window[1]};
 }
 
+void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
+                     const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
+                     const fs::path& out);
+void write_shard(const ProbeOptions& o, const nlohmann::json& settings_json, const CampaignState& state,
+                 double wall, const WorkDistributor& dist, const fs::path& file);
+
+// An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
+void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist) {
+  CampaignState unused(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  CampaignHooks hooks;
+  hooks.should_stop = InterruptGuard::requested;
+  const InterruptGuard interrupts;
+  run_campaign(p, s, unused, hooks, dist);
+}
+
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   fit_window(o);  // refuse a bad window before any probe runs
-  const fs::path checkpoint = out / "probe_checkpoint.json";
+  const auto [shard, shards] = o.shard.empty() ? std::pair{0, 1} : parse_shard(o.shard);
+  const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
+  if (!dist->gathers()) return run_worker(p, s, *dist);
+  const std::string part = shards > 1 ? "-shard-" + std::to_string(shard) + "-of-" + std::to_string(shards) : "";
+  const fs::path checkpoint = out / ("probe_checkpoint" + part + ".json");
   const nlohmann::json settings_json = to_json(s);
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
   if (fs::exists(checkpoint)) {
@@ -141,8 +164,10 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
   }
   const int total = static_cast<int>(campaign_targets(p, s).size());
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads\n", total,
-               o.dir.c_str(), o.method.c_str(), omp_get_max_threads());
+  const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
+                             : shards > 1       ? ", shard " + o.shard : "";
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), omp_get_max_threads(), spread.c_str());
 
   const auto t0 = std::chrono::steady_clock::now();
   auto last_report = t0, last_checkpoint = t0;
@@ -167,11 +192,14 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     last_checkpoint = now;
     save_checkpoint(st);
   };
-  hooks.should_stop = InterruptGuard::requested;
+  hooks.should_stop = [&] {
+    return InterruptGuard::requested() ||
+           (o.stop_after > 0 && state.rows.size() >= done_before + o.stop_after);
+  };
   bool finished = false;
   {
     const InterruptGuard interrupts;
-    finished = run_campaign(p, s, state, hooks);
+    finished = run_campaign(p, s, state, hooks, *dist);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!finished) {
@@ -179,7 +207,38 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     throw Error("interrupted after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
   }
+  if (shards > 1)
+    write_shard(o, settings_json, state, wall, *dist, out / shard_file_name("probe_shard", shard, shards));
+  else
+    finish_campaign(o, p, settings_json, state, wall, dist->loads(), out);
+  fs::remove(checkpoint);
+}
 
+// The JSON of per-rank loads (tasks and compute time of each MPI rank or process).
+nlohmann::json loads_json(const std::vector<RankLoad>& loads) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const RankLoad& l : loads)
+    j.push_back({{"rank", l.rank}, {"threads", l.threads}, {"probes", l.tasks}, {"busy_seconds", l.busy_seconds}});
+  return j;
+}
+
+// A finished shard: its state, what merge needs to write the outputs, its own run.
+void write_shard(const ProbeOptions& o, const nlohmann::json& settings_json, const CampaignState& state,
+                 double wall, const WorkDistributor& dist, const fs::path& file) {
+  const nlohmann::json j = {{"settings", settings_json}, {"state", to_json(state)},
+                            {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}}},
+                            {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
+                            {"wall_seconds", wall}, {"ranks", loads_json(dist.loads())}};
+  write_file_atomic(file, j.dump());
+  std::printf("shard %s: %zu probes of %s in %s -> %s (merge the shards with `unjam merge`)\n",
+              o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(wall).c_str(),
+              file.c_str());
+}
+
+// probes.csv, response_field.csv, response_profile.csv, probe_summary.json and the report.
+void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
+                     const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
+                     const fs::path& out) {
   const CampaignSummary sum = summarize(p, state, fit_window(o));
   const PackingStats stats = compute_packing_stats(p);
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
@@ -201,8 +260,9 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
       {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
       {"settings", settings_json},
       {"method", o.method},
-      {"g", s.kinematic.g},
+      {"g", o.g},
       {"wall_seconds", wall},
+      {"ranks", loads_json(loads)},
   };
   if (sum.has_fit) {
     summary["alpha"] = sum.fit.alpha;
@@ -214,7 +274,6 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     summary["fit_error"] = sum.fit_error;
   }
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
-  fs::remove(checkpoint);
 
   std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),
               o.method.c_str(), format_duration(wall).c_str(), out.c_str());
@@ -226,6 +285,10 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);
   else
     std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
+  if (loads.size() > 1)
+    for (const RankLoad& l : loads)
+      std::printf("  rank %d: %lld probes, %s busy (%d threads)\n", l.rank, l.tasks,
+                  format_duration(l.busy_seconds).c_str(), l.threads);
 }
 
 void run(const ProbeOptions& o) {
@@ -249,6 +312,39 @@ void run(const ProbeOptions& o) {
 }
 
 }  // namespace
+
+bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
+  const fs::path out = out_dir.empty() ? fs::path(dir) : fs::path(out_dir);
+  const Packing p = read_packing(dir);
+  const std::vector<nlohmann::json> shards = read_shards(out, "probe_shard");
+  if (shards.empty()) return false;
+  ProbeOptions o;
+  o.dir = dir;
+  const nlohmann::json& first = shards.front();
+  o.method = first.at("options").at("method").get<std::string>();
+  o.g = first.at("options").at("g").get<double>();
+  o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
+  CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  std::vector<RankLoad> loads;
+  double wall = 0.0;
+  for (const nlohmann::json& j : shards) {
+    if (j.at("settings") != first.at("settings") || j.at("options") != first.at("options"))
+      throw Error("the shards in " + out.string() + " come from runs with other settings");
+    const CampaignState part = campaign_state_from_json(j.at("state"));
+    for (const ProbeRow& r : part.rows) state.rows.push_back(r);
+    state.average.merge(part.average);
+    wall = std::max(wall, j.at("wall_seconds").get<double>());
+    RankLoad load;
+    load.rank = static_cast<int>(loads.size());
+    load.tasks = static_cast<long long>(part.rows.size());
+    for (const auto& l : j.at("ranks")) load.busy_seconds += l.at("busy_seconds").get<double>();
+    loads.push_back(load);
+  }
+  std::sort(state.rows.begin(), state.rows.end(),
+            [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
+  finish_campaign(o, p, first.at("settings"), state, wall, loads, out);
+  return true;
+}
 
 void add_probe_command(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
@@ -278,6 +374,12 @@ void add_probe_command(CLI::App& app) {
                   "r_lo r_hi of the power-law fit of d(r) (R_max; default [<2R>, min(10 <2R>, L/2)])")
       ->expected(2);
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
+  cmd->add_option("--shard", o->shard,
+                  "i/K: probe only the contacts k with k mod K = i (one job of a job array; "
+                  "`unjam merge` joins the K shards into the outputs of one run)");
+  cmd->add_option("--stop-after", o->stop_after,
+                  "stop after this many new probes, saving the checkpoint (as Ctrl-C; rerun to resume)")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([o] { run(*o); });
 }
 

@@ -4,6 +4,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/run_info.hpp"
+#include "unjam/campaign/distributor.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 
@@ -18,16 +19,19 @@ int main(int argc, char** argv) {
   unjam::cli::add_probe_command(app);
   unjam::cli::add_bounds_command(app);
   unjam::cli::add_ensemble_command(app);
+  unjam::cli::add_merge_command(app);
+  int code = 0;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    code = app.exit(e);
   } catch (const unjam::Error& e) {
     std::fprintf(stderr, "unjam: error: %s\n", e.what());
-    return 1;
+    code = 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "unjam: internal error: %s\n", e.what());
-    return 2;
+    code = 2;
   }
-  return 0;
+  unjam::end_mpi_job(code);  // under mpirun: finalize, or stop every rank after a failure
+  return code;
 }

@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include "unjam/core/error.hpp"
+#include "unjam/core/work_source.hpp"
 
 namespace unjam {
 
@@ -160,62 +161,69 @@ ForceNetwork ForceLP::network() const {
 
 namespace {
 
-// Solver iterations and loosened solves (ForceLP::loosened_solves) of a batch of LPs.
-struct LpCounts {
-  long long iterations = 0, loosened = 0;
-  LpCounts& operator+=(const LpCounts& more) {
-    iterations += more.iterations;
-    loosened += more.loosened;
-    return *this;
-  }
+// One LP's outcome as it travels to the gathering process: its optimum, the solver's
+// iterations, whether it was loosened, the contacts its optimal network opens (fn <= open_tol;
+// only from LPs solved at the requested tolerance), and the whole network if asked for.
+struct LpOutcome {
+  bool skipped = false;  // phase 2: the contact was already known to open, no LP
+  double value = 0.0;
+  long long iterations = 0;
+  bool loosened = false;
+  std::vector<int> opened;
+  std::vector<double> fn, ft;  // keep_networks_at_max
 };
 
-// Runs solve(lp, k) for every k of `todo` on `threads` threads, one ForceLP copy each, in
-// contiguous chunks (neighbouring contacts share grains: for the simplex the previous optimum
-// is a good start). An exception may not leave an OpenMP loop, so each thread records the
-// first error and skips the rest; it is rethrown here.
+std::string encode(const LpOutcome& o) {
+  ByteWriter w;
+  w.put(o.skipped).put(o.value).put(o.iterations).put(o.loosened);
+  w.put_array(o.opened.data(), o.opened.size());
+  w.put_array(o.fn.data(), o.fn.size()).put_array(o.ft.data(), o.ft.size());
+  return w.take();
+}
+
+LpOutcome decode(const std::string& bytes) {
+  ByteReader r(bytes);
+  LpOutcome o;
+  o.skipped = r.get<bool>();
+  o.value = r.get<double>();
+  o.iterations = r.get<long long>();
+  o.loosened = r.get<bool>();
+  o.opened = r.get_array<int>();
+  o.fn = r.get_array<double>();
+  o.ft = r.get_array<double>();
+  return o;
+}
+
+// Solves one LP with `lp` (solve returns its optimum) and describes the outcome.
 template <class Solve>
-LpCounts for_each_lp(const ForceLP& base, const std::vector<int>& todo, int threads,
-                     std::atomic<int>& done, const ForceBoundsOptions& options, int total,
-                     Solve solve) {
-  const int n = static_cast<int>(todo.size());
-  if (n == 0) return {};  // no model copies for nothing to do
-  std::atomic<long long> iterations{0}, loosened{0};
-  bool any_error = false;
-  std::string error;
-#pragma omp parallel num_threads(std::min(threads, n))
-  {
-    ForceLP lp(base);  // own model and basis; a copy counts its own iterations from 0
-#pragma omp for schedule(dynamic, 16)
-    for (int i = 0; i < n; ++i) {
-      bool failed = false;
-#pragma omp atomic read
-      failed = any_error;
-      if (failed) continue;
-      try {
-        solve(lp, todo[i]);
-      } catch (const std::exception& e) {
-#pragma omp critical(unjam_force_bounds_error)
-        if (!any_error) {
-          error = e.what();
-#pragma omp atomic write
-          any_error = true;
-        }
-      }
-      const int n_done = ++done;
-      if (options.progress && omp_get_thread_num() == 0) options.progress(n_done, total);
-    }
-    iterations += lp.iterations();
-    loosened += lp.loosened_solves();
+LpOutcome solve_lp(ForceLP& lp, double open_tol, bool keep_network, Solve solve) {
+  const long long before = lp.iterations();
+  LpOutcome o;
+  o.value = solve(lp);
+  o.iterations = lp.iterations() - before;
+  o.loosened = lp.last_solve_loosened();
+  if (o.loosened && !keep_network) return o;
+  const ForceNetwork net = lp.network();
+  if (!o.loosened)
+    for (Eigen::Index j = 0; j < net.fn.size(); ++j)
+      if (net.fn[j] <= open_tol) o.opened.push_back(static_cast<int>(j));
+  if (keep_network) {
+    o.fn.assign(net.fn.data(), net.fn.data() + net.fn.size());
+    o.ft.assign(net.ft.data(), net.ft.data() + net.ft.size());
   }
-  if (any_error) throw Error(error);
-  return {iterations, loosened};
+  return o;
 }
 
 }  // namespace
 
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
                                  const ForceBoundsOptions& options) {
+  LocalDistributor local;
+  return compute_force_bounds(system, options, local);
+}
+
+ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBoundsOptions& options,
+                                 WorkDistributor& distributor) {
   const auto t_start = std::chrono::steady_clock::now();
   const int Nc = system.num_contacts();
   ForceBounds bounds;
@@ -225,60 +233,95 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
   const double open_tol = options.open_tol_F0 * system.F0;
 
   const ForceLP base(system, options.method, options.tolerance);  // throws if the set is empty
-  LpCounts counts{base.iterations(), 0};
-  std::atomic<int> done{0};
+  bounds.iterations = base.iterations();
+  int done = 0;
   const int total = 2 * Nc;  // LPs, the minima certified without one counted as done
-
-  // Phase 1: fn_max of every contact. Each optimal network is admissible, so it bounds every
-  // contact's minimum from above: fn_min_j <= fn_j(network). Thread-local minima, merged
-  // after the loop (a minimum does not depend on the order).
-  std::vector<int> all(Nc);
-  for (int k = 0; k < Nc; ++k) all[k] = k;
   const int threads = std::max(1, options.threads);
-  std::vector<Eigen::VectorXd> seen_min(threads, bounds.fn_min);
-  counts += for_each_lp(base, all, threads, done, options, total, [&](ForceLP& lp, int k) {
-    bounds.fn_max[k] = lp.max_fn(k);
-    ForceNetwork net = lp.network();
-    // Only networks admissible to the requested tolerance certify fn_min = 0.
-    Eigen::VectorXd& seen = seen_min[omp_get_thread_num()];
-    if (!lp.last_solve_loosened()) seen = seen.cwiseMin(net.fn);
-    if (options.keep_networks_at_max) bounds.network_at_max[k] = std::move(net);
-  });
-  for (const Eigen::VectorXd& seen : seen_min) bounds.fn_min = bounds.fn_min.cwiseMin(seen);
+  // Contiguous chunks for the simplex (neighbouring contacts share grains: the previous
+  // optimum is a good start); one LP at a time for the barrier, which starts from scratch.
+  const int chunk = options.method == LpMethod::simplex ? 16 : 1;
+  // `opened`: contacts some admissible network (an LP optimum at the requested tolerance)
+  // leaves open, fn <= open_tol: their fn_min is 0 without an LP of their own. The gathering
+  // process knows every network; each process also marks those of its own LPs, so that it
+  // skips them before the gathering process could tell it.
+  std::vector<char> opened(Nc, 0);
+  std::vector<std::atomic<char>> opened_here(Nc);
+  for (std::atomic<char>& o : opened_here) o = 0;
+  const auto mark = [&](const LpOutcome& o) {
+    for (const int j : o.opened) opened[j] = 1;
+  };
+  const auto count = [&](const LpOutcome& o) {
+    bounds.iterations += o.iterations;
+    bounds.loosened_solves += o.loosened;
+    if (options.progress) options.progress(++done, total);
+  };
+  const auto make_lp = [&] { return ForceLP(base); };  // own model and basis per thread
 
-  // A contact open (fn <= open_tol) in an admissible network can open: fn_min = 0 without
-  // an LP of its own.
-  std::vector<int> todo;
-  for (int k = 0; k < Nc; ++k) {
-    if (bounds.fn_min[k] <= open_tol)
-      bounds.fn_min[k] = 0.0;
-    else
-      todo.push_back(k);
-  }
-  // Phase 2: the LP of every other contact. Each optimal network may open further contacts
-  // still queued; their LPs are skipped too (which ones depends on the order, the values
-  // do not: a minimum at or below open_tol is reported as 0).
-  std::vector<std::atomic<char>> opened(Nc);
-  for (std::atomic<char>& o : opened) o = 0;
-  std::atomic<int> skipped{Nc - static_cast<int>(todo.size())};
-  done += skipped;
-  counts += for_each_lp(base, todo, threads, done, options, total, [&](ForceLP& lp, int k) {
-    if (opened[k].load(std::memory_order_relaxed)) {
-      bounds.fn_min[k] = 0.0;
-      ++skipped;
-      return;
+  // Phase 1: fn_max of every contact; each argmax network certifies the contacts it opens.
+  std::vector<int> all;
+  if (distributor.gathers())
+    for (int k = 0; k < Nc; ++k) all.push_back(k);
+  WorkLoop maxima;
+  maxima.work = [&](WorkSource& source) {
+    work_off(source, threads, chunk, make_lp, [&](ForceLP& lp, int k) {
+      return encode(solve_lp(lp, open_tol, options.keep_networks_at_max,
+                             [k](ForceLP& l) { return l.max_fn(k); }));
+    });
+  };
+  maxima.gather = [&](std::vector<TaskResult>& results) {
+    for (const TaskResult& r : results) {
+      LpOutcome o = decode(r.bytes);
+      bounds.fn_max[r.task] = o.value;
+      mark(o);
+      count(o);
+      if (options.keep_networks_at_max)
+        bounds.network_at_max[r.task] = {Eigen::Map<const Eigen::VectorXd>(o.fn.data(), Nc),
+                                         Eigen::Map<const Eigen::VectorXd>(o.ft.data(), Nc)};
     }
-    const double fn_min = lp.min_fn(k);
-    bounds.fn_min[k] = fn_min <= open_tol ? 0.0 : fn_min;
-    if (lp.last_solve_loosened()) return;
-    const Eigen::VectorXd fn = lp.network().fn;
-    for (int j = 0; j < Nc; ++j)
-      if (fn[j] <= open_tol) opened[j].store(1, std::memory_order_relaxed);
-  });
-  bounds.min_lps_skipped = skipped;
-  if (options.progress) options.progress(total, total);
-  bounds.iterations = counts.iterations;
-  bounds.loosened_solves = counts.loosened;
+  };
+  distributor.run(all, maxima);
+
+  // Phase 2: the min LP of every other contact, in order; each optimal network may open
+  // contacts still queued, whose LPs are then skipped (which ones depends on the order, the
+  // values do not: a minimum at or below open_tol is reported as 0).
+  std::vector<int> todo;
+  for (const int k : all) {
+    if (opened[k]) {
+      bounds.fn_min[k] = 0.0;
+      ++bounds.min_lps_skipped;
+      done += 1;
+    } else {
+      todo.push_back(k);
+    }
+  }
+  WorkLoop minima;
+  minima.skip = [&](int k) {
+    if (!opened[k]) return false;
+    bounds.fn_min[k] = 0.0;
+    ++bounds.min_lps_skipped;
+    if (options.progress) options.progress(++done, total);
+    return true;
+  };
+  minima.work = [&](WorkSource& source) {
+    work_off(source, threads, chunk, make_lp, [&](ForceLP& lp, int k) {
+      LpOutcome o;
+      o.skipped = opened_here[k].load(std::memory_order_relaxed);
+      if (!o.skipped) o = solve_lp(lp, open_tol, false, [k](ForceLP& l) { return l.min_fn(k); });
+      for (const int j : o.opened) opened_here[j].store(1, std::memory_order_relaxed);
+      return encode(o);
+    });
+  };
+  minima.gather = [&](std::vector<TaskResult>& results) {
+    for (const TaskResult& r : results) {
+      const LpOutcome o = decode(r.bytes);
+      bounds.fn_min[r.task] = o.skipped || o.value <= open_tol ? 0.0 : o.value;
+      bounds.min_lps_skipped += o.skipped;
+      mark(o);
+      count(o);
+    }
+  };
+  distributor.run(todo, minima);
+  if (options.progress && distributor.gathers()) options.progress(total, total);
   bounds.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return bounds;

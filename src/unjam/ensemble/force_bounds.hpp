@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/work_source.hpp"
 #include "unjam/ensemble/lp_barrier.hpp"
 
 class ClpSimplex;
@@ -106,7 +107,7 @@ struct ForceBoundsOptions {
   // A contact with fn <= open_tol_F0 F0 in an admissible network can open: its fn_min is 0.
   // Minima at or below this are reported as 0 (the LP's own accuracy is ~tolerance).
   double open_tol_F0 = 1e-9;
-  // Called now and then from one thread with (LPs done, total = 2 N_c); may be empty.
+  // Called with (LPs done, total = 2 N_c) after every LP, one call at a time; may be empty.
   std::function<void(int, int)> progress;
 };
 
@@ -126,9 +127,16 @@ struct ForceBounds {
 //   2. fn_min by LP for the rest, skipping any contact an earlier minimum's network opened.
 // On a 2000-disk mu = 0.1 packing about a third of the contacts can open, and this saves
 // 86 % of their min LPs (docs/ensemble.md).
-// With several threads the LPs are shared out in contiguous chunks; each LP optimum value is
-// unique, so results agree with one thread up to the solver tolerance.
+// The LPs are handed out one at a time (the simplex: in contiguous chunks of 16) to the
+// threads; each barrier LP starts from scratch, so its optimum does not depend on which thread
+// solves it, nor on what it solved before.
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
                                  const ForceBoundsOptions& options = {});
+
+// The same over the processes of `distributor` (core/work_source.hpp), `options.threads` each:
+// the result, progress and counts are those of the gathering process (rank 0); elsewhere
+// the returned bounds are incomplete.
+ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBoundsOptions& options,
+                                 WorkDistributor& distributor);
 
 }  // namespace unjam

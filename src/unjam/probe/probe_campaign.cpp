@@ -52,6 +52,36 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
   average.add_probe(r.contact, field, r.g);
 }
 
+// A probe's row and field as bytes (what travels to the gathering process).
+std::string encode(const ProbeResult& r) {
+  ByteWriter w;
+  w.put(r.contact).put(r.a).put(r.b).put(r.f_cont).put(r.f_crit).put(r.g).put(r.lambda_dt);
+  w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations);
+  std::vector<double> u(2 * r.u.size());
+  for (std::size_t i = 0; i < r.u.size(); ++i) u[2 * i] = r.u[i].x(), u[2 * i + 1] = r.u[i].y();
+  w.put_array(u.data(), u.size());
+  return w.take();
+}
+
+ProbeResult decode(const std::string& bytes) {
+  ByteReader in(bytes);
+  ProbeResult r;
+  r.contact = in.get<int>();
+  r.a = in.get<int>();
+  r.b = in.get<int>();
+  r.f_cont = in.get<double>();
+  r.f_crit = in.get<double>();
+  r.g = in.get<double>();
+  r.lambda_dt = in.get<double>();
+  r.converged = in.get<bool>();
+  r.sweeps = in.get<long long>();
+  r.residual = in.get<double>();
+  r.violations = in.get<int>();
+  const std::vector<double> u = in.get_array<double>();
+  for (std::size_t i = 0; i + 1 < u.size(); i += 2) r.u.emplace_back(u[i], u[i + 1]);
+  return r;
+}
+
 }  // namespace
 
 const char* method_name(ProbeMethod method) {
@@ -90,42 +120,46 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
 
 bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
                   const CampaignHooks& hooks) {
+  LocalDistributor local;
+  return run_campaign(p, s, state, hooks, local);
+}
+
+bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
+                  const CampaignHooks& hooks, WorkDistributor& distributor) {
   const std::vector<int> all = campaign_targets(p, s);
   std::vector<int> todo;
-  std::vector<char> listed(p.contacts.size(), 0);
-  for (const ProbeRow& r : state.rows) listed[r.contact] = 1;
-  for (const int k : all)
-    if (!state.average.has_probe(k) && !listed[k]) todo.push_back(k);
+  if (distributor.gathers()) {
+    std::vector<char> listed(p.contacts.size(), 0);
+    for (const ProbeRow& r : state.rows) listed[r.contact] = 1;
+    for (const int k : all)
+      if (!state.average.has_probe(k) && !listed[k]) todo.push_back(k);
+  }
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
-  const int threads = omp_get_max_threads();
-  std::vector<Worker> workers(threads);
-  // Batches of a few probes per thread: between batches the state is merged, reported,
-  // checkpointed, and a stop request is honoured.
-  const int batch = 4 * threads;
-  for (std::size_t start = 0; start < todo.size(); start += batch) {
-    if (hooks.should_stop && hooks.should_stop()) return false;
-    const int n = static_cast<int>(std::min<std::size_t>(batch, todo.size() - start));
-    std::vector<std::optional<ProbeResult>> results(n);
-    std::vector<std::string> errors(n);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int j = 0; j < n; ++j) {
-      try {
-        results[j] = workers[omp_get_thread_num()].probe(p, s, todo[start + j]);
-      } catch (const std::exception& e) {
-        errors[j] = e.what();
-      }
+  WorkLoop loop;
+  loop.should_stop = hooks.should_stop;
+  loop.work = [&](WorkSource& source) {
+    work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; },
+             [&](Worker& w, int k) {
+               try {
+                 return encode(w.probe(p, s, k));
+               } catch (const std::exception& e) {
+                 throw Error("probe of contact " + std::to_string(k) + ": " + e.what());
+               }
+             });
+  };
+  loop.gather = [&](std::vector<TaskResult>& results) {
+    for (const TaskResult& tr : results) {
+      const ProbeResult r = decode(tr.bytes);
+      if (r.residual != kNoSolution) add_to_average(p, s, loaded, r, state.average);
+      const ProbeRow row = row_of(r);
+      state.rows.insert(std::upper_bound(state.rows.begin(), state.rows.end(), row,
+                                         [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; }),
+                        row);
     }
-    for (int j = 0; j < n; ++j) {
-      if (!results[j]) throw Error("probe of contact " + std::to_string(todo[start + j]) + ": " + errors[j]);
-      if (results[j]->residual != kNoSolution) add_to_average(p, s, loaded, *results[j], state.average);
-      state.rows.push_back(row_of(*results[j]));
-    }
-    std::sort(state.rows.begin(), state.rows.end(),
-              [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
     if (hooks.progress) hooks.progress(static_cast<int>(state.rows.size()), static_cast<int>(all.size()));
     if (hooks.checkpoint) hooks.checkpoint(state);
-  }
-  return true;
+  };
+  return distributor.run(todo, loop);
 }
 
 CampaignSummary summarize(const Packing& p, const CampaignState& state,

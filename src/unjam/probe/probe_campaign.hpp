@@ -14,6 +14,7 @@
 
 #include "unjam/analysis/power_law_fit.hpp"
 #include "unjam/analysis/response_average.hpp"
+#include "unjam/core/work_source.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
@@ -58,8 +59,8 @@ struct CampaignState {
 };
 
 struct CampaignHooks {
-  std::function<void(int done, int total)> progress;  // after every batch
-  std::function<void(const CampaignState&)> checkpoint;  // after every batch
+  std::function<void(int done, int total)> progress;  // after every gathered probe
+  std::function<void(const CampaignState&)> checkpoint;  // after every gathered probe
   std::function<bool()> should_stop;
 };
 
@@ -79,6 +80,14 @@ std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings
 // Probes every target not yet in `state`; returns false if should_stop ended it early.
 bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
                   const CampaignHooks& hooks = {});
+
+// The same over the processes of `distributor` (core/work_source.hpp): every process probes
+// the contacts handed to it, one per thread at a time; `state` and the hooks are those of the
+// gathering process (rank 0), which receives every probe's row and field and keeps `state`
+// exactly as one process would (rows sorted by contact, fixed-point averages). Elsewhere
+// `state` stays as it is and the return value is meaningless.
+bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
+                  const CampaignHooks& hooks, WorkDistributor& distributor);
 
 // Probes one contact with the campaign's method.
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);

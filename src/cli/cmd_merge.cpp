@@ -1,0 +1,32 @@
+// `unjam merge DIR`: joins the shards of a scheduler job array (`unjam probe ... --shard i/K`,
+// `unjam bounds ... --shard i/K`, one job each) into the files one run would have written,
+// byte for byte (the rows are sorted by contact, the averages are fixed-point sums).
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "cli/commands.hpp"
+#include "cli/shards.hpp"
+#include "unjam/core/error.hpp"
+
+namespace unjam::cli {
+
+void add_merge_command(CLI::App& app) {
+  struct Options {
+    std::string dir, out;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "merge", "join the outputs of `probe --shard i/K` and `bounds --shard i/K` jobs into those of one run");
+  cmd->add_option("dir", o->dir, "packing directory")->required();
+  cmd->add_option("--out", o->out, "directory of the shard files and the outputs (default: the packing directory)");
+  cmd->callback([o] {
+    const bool probes = merge_probe_shards(o->dir, o->out);
+    const bool bounds = merge_bounds_shards(o->dir, o->out);
+    if (!probes && !bounds)
+      throw Error("no shard outputs (probe_shard-i-of-K.json, bounds_shard-i-of-K.json) in " +
+                  (o->out.empty() ? o->dir : o->out));
+  });
+}
+
+}  // namespace unjam::cli

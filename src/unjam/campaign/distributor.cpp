@@ -1,0 +1,294 @@
+#include "unjam/campaign/distributor.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <thread>
+
+#include "unjam/core/error.hpp"
+
+#if UNJAM_WITH_MPI
+#include <mpi.h>
+#endif
+
+namespace unjam {
+namespace {
+
+// The world size the launcher announces (Open MPI, PMI/Slurm, PMIx), 0 if none.
+int launcher_size() {
+  for (const char* var : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* v = std::getenv(var)) return std::atoi(v);
+  return 0;
+}
+
+}  // namespace
+
+bool launched_by_mpi() { return launcher_size() > 0; }
+
+std::pair<int, int> parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  try {
+    if (slash != std::string::npos) {
+      std::size_t used_i = 0, used_k = 0;
+      const int i = std::stoi(text.substr(0, slash), &used_i);
+      const int k = std::stoi(text.substr(slash + 1), &used_k);
+      if (used_i == slash && used_k == text.size() - slash - 1 && k >= 1 && i >= 0 && i < k)
+        return {i, k};
+    }
+  } catch (const std::exception&) {
+  }
+  throw Error("--shard takes i/K with 0 <= i < K (got '" + text + "')");
+}
+
+#if UNJAM_WITH_MPI
+
+namespace {
+
+bool g_started = false;
+
+void start_mpi() {
+  if (g_started) return;
+  int provided = 0;
+  MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
+  if (provided < MPI_THREAD_SERIALIZED)
+    throw Error("the MPI library does not support MPI_THREAD_SERIALIZED");
+  g_started = true;
+}
+
+[[noreturn]] void abort_job(const std::exception& e) {
+  std::fprintf(stderr, "unjam: error: %s\n", e.what());
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  std::abort();
+}
+
+// Message tags of loop `round`: requests (worker -> rank 0) and replies.
+int request_tag(int round) { return 100 + 2 * round; }
+int reply_tag(int round) { return 101 + 2 * round; }
+
+// A worker's message: its want (tasks; -1: it leaves the loop), its load, its results.
+std::string encode_request(int want, const RankLoad& load, const std::vector<TaskResult>& results) {
+  ByteWriter w;
+  w.put<std::int32_t>(want).put<std::int32_t>(load.threads).put<double>(load.busy_seconds);
+  w.put<std::uint64_t>(results.size());
+  for (const TaskResult& r : results) w.put<std::int32_t>(r.task).put_array(r.bytes.data(), r.bytes.size());
+  return w.take();
+}
+
+std::string receive(int source, int tag, int* from = nullptr) {
+  MPI_Status status;
+  MPI_Probe(source, tag, MPI_COMM_WORLD, &status);
+  int count = 0;
+  MPI_Get_count(&status, MPI_BYTE, &count);
+  std::string bytes(static_cast<std::size_t>(count), '\0');
+  MPI_Recv(bytes.data(), count, MPI_BYTE, status.MPI_SOURCE, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  if (from) *from = status.MPI_SOURCE;
+  return bytes;
+}
+
+void send(const std::string& bytes, int dest, int tag) {
+  MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, dest, tag, MPI_COMM_WORLD);
+}
+
+// Rank 0's own threads: the queue and the gathering, under the lock the server shares.
+class RootSource : public WorkSource {
+ public:
+  RootSource(TaskQueue& queue, const WorkLoop& loop, RankLoad& load, std::mutex& mutex)
+      : queue_(queue), loop_(loop), load_(load), mutex_(mutex) {}
+  std::vector<int> take(int max) override {
+    const std::lock_guard lock(mutex_);
+    std::vector<int> tasks = queue_.next(max);
+    if (!tasks.empty()) clock_.taken();
+    return tasks;
+  }
+  void put(std::vector<TaskResult> results) override {
+    const std::lock_guard lock(mutex_);
+    clock_.put(load_, results.size());
+    loop_.gather(results);
+  }
+
+ private:
+  TaskQueue& queue_;
+  const WorkLoop& loop_;
+  RankLoad& load_;
+  BusyClock clock_;
+  std::mutex& mutex_;
+};
+
+// A worker's threads: each take sends the results put since the last one and asks rank 0
+// for tasks (one thread at a time on the wire: MPI_THREAD_SERIALIZED).
+class WorkerSource : public WorkSource {
+ public:
+  WorkerSource(const WorkLoop& loop, RankLoad& load, int round) : loop_(loop), load_(load), round_(round) {}
+  std::vector<int> take(int max) override {
+    const std::lock_guard lock(mutex_);
+    if (finished_ || (loop_.should_stop && loop_.should_stop())) {
+      finished_ = true;
+      return {};
+    }
+    send(encode_request(max, load_, pending_), 0, request_tag(round_));
+    pending_.clear();
+    const std::string reply = receive(0, reply_tag(round_));
+    ByteReader r(reply);
+    std::vector<int> tasks = r.get_array<int>();
+    if (tasks.empty()) finished_ = true;
+    else clock_.taken();
+    return tasks;
+  }
+  void put(std::vector<TaskResult> results) override {
+    const std::lock_guard lock(mutex_);
+    clock_.put(load_, results.size());
+    for (TaskResult& r : results) pending_.push_back(std::move(r));
+  }
+  // After every thread is done: the last results, and this rank leaves the loop.
+  void leave() {
+    send(encode_request(-1, load_, pending_), 0, request_tag(round_));
+    pending_.clear();
+  }
+
+ private:
+  const WorkLoop& loop_;
+  RankLoad& load_;
+  int round_;
+  BusyClock clock_;
+  std::mutex mutex_;
+  std::vector<TaskResult> pending_;
+  bool finished_ = false;
+};
+
+class MpiDistributor : public WorkDistributor {
+ public:
+  MpiDistributor() {
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks_);
+    loads_.resize(ranks_);
+    for (int r = 0; r < ranks_; ++r) loads_[r].rank = r;
+    loads_[rank_].threads = omp_get_max_threads();
+  }
+  bool gathers() const override { return rank_ == 0; }
+  int rank() const override { return rank_; }
+  int ranks() const override { return ranks_; }
+  std::vector<RankLoad> loads() const override {
+    return rank_ == 0 ? loads_ : std::vector<RankLoad>{loads_[rank_]};
+  }
+
+  bool run(const std::vector<int>& tasks, const WorkLoop& loop) override {
+    const int round = ++round_;
+    try {
+      if (rank_ != 0) {
+        WorkerSource source(loop, loads_[rank_], round);
+        loop.work(source);
+        source.leave();
+        return false;
+      }
+      TaskQueue queue(tasks, loop);
+      std::mutex mutex;
+      RootSource source(queue, loop, loads_[0], mutex);
+      std::thread server([&] { serve(queue, loop, mutex, round); });
+      try {
+        loop.work(source);
+      } catch (const std::exception& e) {
+        abort_job(e);  // the server thread cannot be joined while workers still ask
+      }
+      server.join();
+      return queue.exhausted();
+    } catch (const std::exception& e) {
+      abort_job(e);
+    }
+  }
+
+ private:
+  // Rank 0's server: answers requests until every worker has left the loop. It polls
+  // (MPI_Iprobe, then a short sleep) rather than block, since a blocking receive of Open
+  // MPI spins and would take a core from rank 0's own probes.
+  void serve(TaskQueue& queue, const WorkLoop& loop, std::mutex& mutex, int round) {
+    try {
+      int left = ranks_ - 1;
+      while (left > 0) {
+        int flag = 0;
+        MPI_Status status;
+        MPI_Iprobe(MPI_ANY_SOURCE, request_tag(round), MPI_COMM_WORLD, &flag, &status);
+        if (!flag) {
+          std::this_thread::sleep_for(std::chrono::microseconds(200));
+          continue;
+        }
+        int from = 0;
+        const std::string msg = receive(status.MPI_SOURCE, request_tag(round), &from);
+        ByteReader r(msg);
+        const int want = r.get<std::int32_t>();
+        RankLoad& load = loads_[from];
+        load.threads = r.get<std::int32_t>();
+        load.busy_seconds = r.get<double>();
+        std::vector<TaskResult> results(r.get<std::uint64_t>());
+        for (TaskResult& res : results) {
+          res.task = r.get<std::int32_t>();
+          const std::vector<char> bytes = r.get_array<char>();
+          res.bytes.assign(bytes.begin(), bytes.end());
+        }
+        std::vector<int> tasks;
+        {
+          const std::lock_guard lock(mutex);
+          load.tasks += static_cast<long long>(results.size());
+          if (!results.empty()) loop.gather(results);
+          if (want >= 0) tasks = queue.next(want);
+        }
+        if (want < 0) {
+          --left;
+          continue;
+        }
+        ByteWriter w;
+        w.put_array(tasks.data(), tasks.size());
+        send(w.take(), from, reply_tag(round));
+      }
+    } catch (const std::exception& e) {
+      abort_job(e);
+    }
+  }
+
+  int rank_ = 0, ranks_ = 1, round_ = 0;
+  std::vector<RankLoad> loads_;
+};
+
+}  // namespace
+
+bool mpi_available() { return true; }
+
+std::unique_ptr<WorkDistributor> make_distributor(int shard, int shards) {
+  if (launched_by_mpi()) {
+    start_mpi();
+    int ranks = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    if (ranks > 1) {
+      if (shards > 1) throw Error("--shard is for separate jobs; under mpirun the ranks share the work");
+      return std::make_unique<MpiDistributor>();
+    }
+  }
+  return std::make_unique<LocalDistributor>(shard, shards);
+}
+
+void end_mpi_job(int exit_code) {
+  if (!g_started) return;
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (exit_code != 0 && ranks > 1) MPI_Abort(MPI_COMM_WORLD, exit_code);
+  MPI_Finalize();
+  g_started = false;
+}
+
+#else  // a build without MPI
+
+bool mpi_available() { return false; }
+
+std::unique_ptr<WorkDistributor> make_distributor(int shard, int shards) {
+  if (launcher_size() > 1)
+    throw Error("this unjam was built without MPI (CMake option UNJAM_MPI off): under mpirun every "
+                "rank would compute the whole campaign; rebuild with Open MPI installed, or use "
+                "--shard i/K and `unjam merge`");
+  return std::make_unique<LocalDistributor>(shard, shards);
+}
+
+void end_mpi_job(int) {}
+
+#endif
+
+}  // namespace unjam

@@ -1,0 +1,73 @@
+#include "unjam/core/work_source.hpp"
+
+namespace unjam {
+
+std::vector<int> TaskQueue::next(int max) {
+  std::vector<int> out;
+  while (static_cast<int>(out.size()) < max && next_ < tasks_.size()) {
+    if (loop_.should_stop && loop_.should_stop()) break;
+    const int t = tasks_[next_++];
+    if (loop_.skip && loop_.skip(t)) continue;
+    out.push_back(t);
+  }
+  return out;
+}
+
+namespace {
+thread_local std::chrono::steady_clock::time_point t_taken;
+}  // namespace
+
+void BusyClock::taken() { t_taken = std::chrono::steady_clock::now(); }
+
+void BusyClock::put(RankLoad& load, std::size_t results) {
+  load.busy_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_taken).count();
+  load.tasks += static_cast<long long>(results);
+}
+
+namespace {
+
+// The whole queue in this process: take and put lock it, put gathers at once.
+class LocalSource : public WorkSource {
+ public:
+  LocalSource(TaskQueue& queue, const WorkLoop& loop, RankLoad& load)
+      : queue_(queue), loop_(loop), load_(load) {}
+  std::vector<int> take(int max) override {
+    const std::lock_guard lock(mutex_);
+    std::vector<int> tasks = queue_.next(max);
+    if (!tasks.empty()) clock_.taken();
+    return tasks;
+  }
+  void put(std::vector<TaskResult> results) override {
+    const std::lock_guard lock(mutex_);
+    clock_.put(load_, results.size());
+    loop_.gather(results);
+  }
+
+ private:
+  TaskQueue& queue_;
+  const WorkLoop& loop_;
+  RankLoad& load_;
+  BusyClock clock_;
+  std::mutex mutex_;
+};
+
+}  // namespace
+
+LocalDistributor::LocalDistributor(int shard, int shards) : shard_(shard), shards_(shards) {
+  if (shards < 1 || shard < 0 || shard >= shards)
+    throw Error("--shard i/K needs K >= 1 and 0 <= i < K (got " + std::to_string(shard) + "/" +
+                std::to_string(shards) + ")");
+  load_.threads = omp_get_max_threads();
+}
+
+bool LocalDistributor::run(const std::vector<int>& tasks, const WorkLoop& loop) {
+  std::vector<int> mine;
+  for (const int t : tasks)
+    if (t % shards_ == shard_) mine.push_back(t);
+  TaskQueue queue(mine, loop);
+  LocalSource source(queue, loop, load_);
+  loop.work(source);
+  return queue.exhausted();
+}
+
+}  // namespace unjam

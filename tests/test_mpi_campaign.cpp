@@ -1,0 +1,153 @@
+// Campaigns spread over processes, end to end with the real executable: `mpirun -n 2` and
+// `-n 3` (oversubscribed on any machine), a run stopped and resumed with another number of
+// ranks, and a job array of shards joined by `unjam merge`, each against one plain process on
+// the p50 fixture: the same bytes (docs/ARCHITECTURE.md, "Campaigns").
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "unjam/core/atomic_file.hpp"
+
+namespace unjam {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kP50 = fs::path(UNJAM_FIXTURES_DIR) / "p50-mu0.1";
+
+struct ShellRun {
+  int exit_code;
+  std::string output;
+};
+
+ShellRun shell(const std::string& cmd) {
+  FILE* pipe = ::popen((cmd + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  std::string out;
+  char buf[4096];
+  while (const std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
+  const int status = ::pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::string unjam(int ranks, const std::string& args) {
+  const std::string bin = std::string("'") + UNJAM_BINARY + "' " + args;
+  if (ranks == 0) return bin;
+  // CI runs as root, which Open MPI refuses without these two variables.
+  return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -n " +
+         std::to_string(ranks) + " " + bin;
+}
+
+// probe_summary.json without what records the run itself (its duration and per-rank loads).
+std::string summary_of_results(const fs::path& dir) {
+  nlohmann::json j = nlohmann::json::parse(read_file(dir / "probe_summary.json"));
+  j.erase("wall_seconds");
+  j.erase("ranks");
+  j.erase("command");
+  return j.dump(2);
+}
+
+class Distributed : public ::testing::Test {
+ protected:
+  void SetUp() override {
+#if !UNJAM_TEST_MPI
+    GTEST_SKIP() << "built without MPI (UNJAM_MPI off)";
+#endif
+    root_ = fs::temp_directory_path() / ("unjam-mpi-" + std::to_string(std::random_device{}()));
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  // `unjam probe p50 --all` into OUT/name with `ranks` MPI ranks (0: no mpirun), one thread each.
+  fs::path probe(const std::string& name, int ranks, const std::string& extra = "", int expect_code = 0) {
+    const fs::path out = root_ / name;
+    fs::create_directories(out);
+    const ShellRun r = shell(unjam(ranks, "probe '" + kP50.string() + "' --all --method lp --threads 1 --quiet --out '" +
+                                         out.string() + "' " + extra));
+    EXPECT_EQ(r.exit_code, expect_code) << r.output;
+    return out;
+  }
+
+  void expect_same_probe_outputs(const fs::path& a, const fs::path& b) {
+    for (const char* f : {"probes.csv", "response_profile.csv", "response_field.csv"})
+      EXPECT_EQ(read_file(a / f), read_file(b / f)) << f << " of " << b;
+    EXPECT_EQ(summary_of_results(a), summary_of_results(b)) << b;
+  }
+
+  fs::path root_;
+};
+
+TEST_F(Distributed, ProbeOverTwoAndThreeRanksWritesTheBytesOfOneProcess) {
+  const fs::path one = probe("one", 0);
+  ASSERT_TRUE(fs::exists(one / "probes.csv"));
+  const fs::path two = probe("two", 2), three = probe("three", 3);
+  expect_same_probe_outputs(one, two);
+  expect_same_probe_outputs(one, three);
+  // Every rank probed some contacts (rank 0 computes too), and the loads add up.
+  const auto ranks = nlohmann::json::parse(read_file(three / "probe_summary.json")).at("ranks");
+  ASSERT_EQ(ranks.size(), 3u);
+  long long probes = 0;
+  for (const auto& r : ranks) {
+    EXPECT_GT(r.at("probes").get<long long>(), 0) << ranks.dump();
+    probes += r.at("probes").get<long long>();
+  }
+  EXPECT_EQ(probes, nlohmann::json::parse(read_file(three / "probe_summary.json")).at("probes").get<long long>());
+}
+
+TEST_F(Distributed, ProbeStoppedOnTwoRanksResumesOnThree) {
+  const fs::path one = probe("one", 0);
+  const fs::path out = probe("resumed", 2, "--stop-after 20", 1);
+  ASSERT_TRUE(fs::exists(out / "probe_checkpoint.json"));
+  ASSERT_FALSE(fs::exists(out / "probes.csv"));
+  const auto saved = nlohmann::json::parse(read_file(out / "probe_checkpoint.json"));
+  const std::size_t done = saved.at("state").at("rows").size();
+  EXPECT_GE(done, 20u);
+  EXPECT_LT(done, 81u);
+  probe("resumed", 3);
+  EXPECT_FALSE(fs::exists(out / "probe_checkpoint.json"));
+  expect_same_probe_outputs(one, out);
+}
+
+TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
+  const fs::path one = probe("one", 0);
+  const fs::path out = root_ / "shards";
+  for (int i = 0; i < 3; ++i) probe("shards", 0, "--shard " + std::to_string(i) + "/3");
+  ASSERT_FALSE(fs::exists(out / "probes.csv"));
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(fs::exists(out / ("probe_shard-" + std::to_string(i) + "-of-3.json")));
+  fs::remove(out / "probe_shard-1-of-3.json");
+  const ShellRun missing = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.output.find("shard 1/3 is missing"), std::string::npos) << missing.output;
+  probe("shards", 0, "--shard 1/3");
+  const ShellRun merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
+  ASSERT_EQ(merged.exit_code, 0) << merged.output;
+  expect_same_probe_outputs(one, out);
+}
+
+TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
+  const auto bounds = [&](const std::string& name, int ranks, const std::string& extra = "") {
+    fs::create_directories(root_ / name);
+    const fs::path csv = root_ / name / "bounds.csv";
+    const ShellRun r = shell(unjam(ranks, "bounds '" + kP50.string() + "' --threads 1 --out '" + csv.string() + "' " + extra));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return csv;
+  };
+  const std::string one = read_file(bounds("one", 0));
+  EXPECT_EQ(one, read_file(bounds("two", 2)));
+  EXPECT_EQ(one, read_file(bounds("three", 3)));
+  for (int i = 0; i < 2; ++i) bounds("shards", 0, "--shard " + std::to_string(i) + "/2");
+  const ShellRun merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + (root_ / "shards").string() + "'"));
+  ASSERT_EQ(merged.exit_code, 0) << merged.output;
+  EXPECT_EQ(one, read_file(root_ / "shards" / "bounds.csv"));
+  const auto ranks = nlohmann::json::parse(read_file(root_ / "three" / "bounds.json")).at("ranks");
+  EXPECT_EQ(ranks.size(), 3u);
+}
+
+}  // namespace
+}  // namespace unjam
