@@ -2,6 +2,7 @@
 
 Usage:  /usr/bin/python3 scripts/experiment.py --scale demo|tiny|paper [--out runs/experiment]
                                                [--threads N] [--unjam PATH]
+                                               [--mpi K [--mpirun LAUNCHER]]
                                                [--mus ...] [--ns ...] [--seeds ...]
                                                [--probe-g G] [--samples S]
 
@@ -29,6 +30,10 @@ recomputed since, and whose outputs exist and read; it prints "skipped (cached)"
 parameters changed is recomputed, and so is every stage that depends on it.  A stopped
 `unjam pack` resumes with `unjam pack --resume DIR`; a stopped `unjam probe --all` resumes from
 its own checkpoint when run again with the same parameters.  The report is rewritten every run.
+
+MPI: with --mpi K the probe stages run as `mpirun -n K unjam probe ...` (--mpirun names another
+launcher, e.g. "srun" or "mpirun --oversubscribe"); their outputs are the same bytes as in one
+process, so the stage records do not depend on K and cached stages stay valid.
 
 Exit status 0 on success; 1 with a message naming the failed stage and its command.
 """
@@ -134,8 +139,9 @@ class Stage:
 
 
 class Runner:
-    def __init__(self, out, unjam, threads, log_dir):
+    def __init__(self, out, unjam, threads, log_dir, launcher=()):
         self.out = out
+        self.launcher = list(launcher)   # e.g. ["mpirun", "-n", "4"]: for the probe campaigns
         self.unjam = unjam
         self.threads = threads
         self.log_dir = log_dir
@@ -214,8 +220,8 @@ class Runner:
             raise StageError(f"stage {stage.name} failed (exit status {rc}) in the command\n"
                              f"  {quote(cmd)}\nlast lines of {log}:\n{tail}")
 
-    def unjam_cmd(self, *args, threads_flag=True):
-        cmd = [self.unjam] + [str(a) for a in args]
+    def unjam_cmd(self, *args, threads_flag=True, mpi=False):
+        cmd = (self.launcher if mpi else []) + [self.unjam] + [str(a) for a in args]
         if threads_flag and self.threads:
             cmd += ["--threads", str(self.threads)]
         return cmd
@@ -252,7 +258,7 @@ def probe_stage(R, name, d, g, sample, dep):
                 p = os.path.join(d, f)
                 if os.path.exists(p):
                     os.remove(p)
-        R.call(st, R.unjam_cmd("probe", d, *args, "--quiet"))
+        R.call(st, R.unjam_cmd("probe", d, *args, "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
 
@@ -466,7 +472,9 @@ def write_report(path, args, cfg, R, figures, argv):
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",
           f"- unjam: `{R.unjam}`, version `{R.version}`",
-          f"- threads: {args.threads or 'all cores'}",
+          f"- threads: {args.threads or 'all cores'}"
+          + (f" per rank, probe stages over {args.mpi} MPI ranks (`{' '.join(R.launcher)}`)"
+             if args.mpi else ""),
           f"- command line: `{quote([sys.executable, os.path.relpath(os.path.abspath(__file__), REPO)] + argv)}`", "",
           "## Timings", "",
           "This run: 'ran' stages were computed now, 'cached' ones were skipped; the last column "
@@ -501,7 +509,14 @@ def parse_args(argv):
                    "packing (a seeded subset; 0 = all)")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
+    p.add_argument("--mpi", type=int, default=0, metavar="K",
+                   help="run the probe stages over K MPI ranks (`mpirun -n K`; each rank uses "
+                        "--threads threads); results do not depend on it")
+    p.add_argument("--mpirun", default="mpirun",
+                   help="the MPI launcher of --mpi, split like a shell word list (default mpirun)")
     args = p.parse_args(argv)
+    if args.mpi < 0:
+        p.error("--mpi must be >= 0")
     if args.threads < 0:
         p.error("--threads must be >= 0")
     if args.probe_sample is not None and args.probe_sample < 0:
@@ -645,7 +660,8 @@ def main(argv=None):
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
-    R = Runner(out, os.path.abspath(args.unjam), args.threads, os.path.join(out, "logs"))
+    launcher = shlex.split(args.mpirun) + ["-n", str(args.mpi)] if args.mpi > 0 else []
+    R = Runner(out, os.path.abspath(args.unjam), args.threads, os.path.join(out, "logs"), launcher)
     try:
         R.version = subprocess.run([R.unjam, "--version"], capture_output=True, text=True,
                                    check=True).stdout.strip()

@@ -162,6 +162,31 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(d, "particles.csv")) as f:
             self.assertEqual(f.read(), before, "the resumed packing differs")
 
+    def test_6_probe_stage_under_mpi_writes_the_same_bytes(self):
+        # --mpi K runs the probe stages under mpirun; the outputs are those of one process,
+        # so a probe stage recomputed over 2 ranks gives back the same bytes. (CI runs as
+        # root: Open MPI needs the two OMPI_ALLOW_RUN_AS_ROOT variables then.)
+        d = os.path.join(self.out, "packings", "N100-mu0.1-s1")
+        before = {}
+        for name in ("probes.csv", "response_profile.csv"):
+            with open(os.path.join(d, name)) as f:
+                before[name] = f.read()
+        os.remove(os.path.join(d, "probe_summary.json"))   # the stage's outputs are incomplete
+        env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+        p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", self.out,
+                            "--probe-g", "2e-9", "--threads", "1", "--mpi", "2",
+                            "--mpirun", "mpirun --oversubscribe"],
+                           capture_output=True, text=True, cwd=REPO, timeout=300, env=env)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("probe N100-mu0.1-s1", {k for k, v in outcomes(p.stdout).items() if v == "ran"})
+        with open(os.path.join(self.out, "logs", "probe_N100-mu0.1-s1.log")) as f:
+            self.assertIn("mpirun --oversubscribe -n 2", f.read())
+        for name, text in before.items():
+            with open(os.path.join(d, name)) as f:
+                self.assertEqual(f.read(), text, name)
+        with open(os.path.join(d, "probe_summary.json")) as f:
+            self.assertEqual(len(json.load(f)["ranks"]), 2)
+
 
 if __name__ == "__main__":
     unittest.main()
