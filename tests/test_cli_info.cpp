@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shell_command.hpp"
 #include "unjam/core/atomic_file.hpp"
 
 namespace unjam {
@@ -20,20 +21,10 @@ namespace fs = std::filesystem;
 
 const fs::path kFixtures = UNJAM_FIXTURES_DIR;
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using test::CommandResult;
 
 CommandResult run_info(const std::string& args) {
-  const std::string cmd = std::string("'") + UNJAM_BINARY + "' info " + args + " 2>&1";
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (const std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
-  const int status = ::pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  return test::run_command(std::string("'") + UNJAM_BINARY + "' info " + args);
 }
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }

@@ -3,15 +3,14 @@
 // ranks, and a job array of shards joined by `unjam merge`, each against one plain process on
 // the p50 fixture: the same bytes (docs/ARCHITECTURE.md, "Campaigns").
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "shell_command.hpp"
 #include "unjam/core/atomic_file.hpp"
 
 namespace unjam {
@@ -21,20 +20,9 @@ namespace fs = std::filesystem;
 
 const fs::path kP50 = fs::path(UNJAM_FIXTURES_DIR) / "p50-mu0.1";
 
-struct ShellRun {
-  int exit_code;
-  std::string output;
-};
+using test::CommandResult;
 
-ShellRun shell(const std::string& cmd) {
-  FILE* pipe = ::popen((cmd + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (const std::size_t n = std::fread(buf, 1, sizeof buf, pipe)) out.append(buf, n);
-  const int status = ::pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+CommandResult shell(const std::string& cmd) { return test::run_command(cmd); }
 
 std::string unjam(int ranks, const std::string& args) {
   const std::string bin = std::string("'") + UNJAM_BINARY + "' " + args;
@@ -68,7 +56,7 @@ class Distributed : public ::testing::Test {
   fs::path probe(const std::string& name, int ranks, const std::string& extra = "", int expect_code = 0) {
     const fs::path out = root_ / name;
     fs::create_directories(out);
-    const ShellRun r = shell(unjam(ranks, "probe '" + kP50.string() + "' --all --method lp --threads 1 --quiet --out '" +
+    const CommandResult r = shell(unjam(ranks, "probe '" + kP50.string() + "' --all --method lp --threads 1 --quiet --out '" +
                                          out.string() + "' " + extra));
     EXPECT_EQ(r.exit_code, expect_code) << r.output;
     return out;
@@ -121,11 +109,11 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   ASSERT_FALSE(fs::exists(out / "probes.csv"));
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(fs::exists(out / ("probe_shard-" + std::to_string(i) + "-of-3.json")));
   fs::remove(out / "probe_shard-1-of-3.json");
-  const ShellRun missing = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
+  const CommandResult missing = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   EXPECT_EQ(missing.exit_code, 1);
   EXPECT_NE(missing.output.find("shard 1/3 is missing"), std::string::npos) << missing.output;
   probe("shards", 0, "--shard 1/3");
-  const ShellRun merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
+  const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   expect_same_probe_outputs(one, out);
 }
@@ -134,7 +122,7 @@ TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
   const auto bounds = [&](const std::string& name, int ranks, const std::string& extra = "") {
     fs::create_directories(root_ / name);
     const fs::path csv = root_ / name / "bounds.csv";
-    const ShellRun r = shell(unjam(ranks, "bounds '" + kP50.string() + "' --threads 1 --out '" + csv.string() + "' " + extra));
+    const CommandResult r = shell(unjam(ranks, "bounds '" + kP50.string() + "' --threads 1 --out '" + csv.string() + "' " + extra));
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return csv;
   };
@@ -142,7 +130,7 @@ TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
   EXPECT_EQ(one, read_file(bounds("two", 2)));
   EXPECT_EQ(one, read_file(bounds("three", 3)));
   for (int i = 0; i < 2; ++i) bounds("shards", 0, "--shard " + std::to_string(i) + "/2");
-  const ShellRun merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + (root_ / "shards").string() + "'"));
+  const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + (root_ / "shards").string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   EXPECT_EQ(one, read_file(root_ / "shards" / "bounds.csv"));
   const auto ranks = nlohmann::json::parse(read_file(root_ / "three" / "bounds.json")).at("ranks");

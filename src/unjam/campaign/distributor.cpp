@@ -90,31 +90,6 @@ void send(const std::string& bytes, int dest, int tag) {
   MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, dest, tag, MPI_COMM_WORLD);
 }
 
-// Rank 0's own threads: the queue and the gathering, under the lock the server shares.
-class RootSource : public WorkSource {
- public:
-  RootSource(TaskQueue& queue, const WorkLoop& loop, RankLoad& load, std::mutex& mutex)
-      : queue_(queue), loop_(loop), load_(load), mutex_(mutex) {}
-  std::vector<int> take(int max) override {
-    const std::lock_guard lock(mutex_);
-    std::vector<int> tasks = queue_.next(max);
-    if (!tasks.empty()) clock_.taken();
-    return tasks;
-  }
-  void put(std::vector<TaskResult> results) override {
-    const std::lock_guard lock(mutex_);
-    clock_.put(load_, results.size());
-    loop_.gather(results);
-  }
-
- private:
-  TaskQueue& queue_;
-  const WorkLoop& loop_;
-  RankLoad& load_;
-  BusyClock clock_;
-  std::mutex& mutex_;
-};
-
 // A worker's threads: each take sends the results put since the last one and asks rank 0
 // for tasks (one thread at a time on the wire: MPI_THREAD_SERIALIZED).
 class WorkerSource : public WorkSource {
@@ -183,7 +158,7 @@ class MpiDistributor : public WorkDistributor {
       }
       TaskQueue queue(tasks, loop);
       std::mutex mutex;
-      RootSource source(queue, loop, loads_[0], mutex);
+      QueueSource source(queue, loop, loads_[0], mutex);
       std::thread server([&] { serve(queue, loop, mutex, round); });
       try {
         loop.work(source);

@@ -24,34 +24,18 @@ void BusyClock::put(RankLoad& load, std::size_t results) {
   load.tasks += static_cast<long long>(results);
 }
 
-namespace {
+std::vector<int> QueueSource::take(int max) {
+  const std::lock_guard lock(mutex_);
+  std::vector<int> tasks = queue_.next(max);
+  if (!tasks.empty()) clock_.taken();
+  return tasks;
+}
 
-// The whole queue in this process: take and put lock it, put gathers at once.
-class LocalSource : public WorkSource {
- public:
-  LocalSource(TaskQueue& queue, const WorkLoop& loop, RankLoad& load)
-      : queue_(queue), loop_(loop), load_(load) {}
-  std::vector<int> take(int max) override {
-    const std::lock_guard lock(mutex_);
-    std::vector<int> tasks = queue_.next(max);
-    if (!tasks.empty()) clock_.taken();
-    return tasks;
-  }
-  void put(std::vector<TaskResult> results) override {
-    const std::lock_guard lock(mutex_);
-    clock_.put(load_, results.size());
-    loop_.gather(results);
-  }
-
- private:
-  TaskQueue& queue_;
-  const WorkLoop& loop_;
-  RankLoad& load_;
-  BusyClock clock_;
-  std::mutex mutex_;
-};
-
-}  // namespace
+void QueueSource::put(std::vector<TaskResult> results) {
+  const std::lock_guard lock(mutex_);
+  clock_.put(load_, results.size());
+  loop_.gather(results);
+}
 
 LocalDistributor::LocalDistributor(int shard, int shards) : shard_(shard), shards_(shards) {
   if (shards < 1 || shard < 0 || shard >= shards)
@@ -65,7 +49,8 @@ bool LocalDistributor::run(const std::vector<int>& tasks, const WorkLoop& loop) 
   for (const int t : tasks)
     if (t % shards_ == shard_) mine.push_back(t);
   TaskQueue queue(mine, loop);
-  LocalSource source(queue, loop, load_);
+  std::mutex mutex;
+  QueueSource source(queue, loop, load_, mutex);
   loop.work(source);
   return queue.exhausted();
 }

@@ -92,6 +92,30 @@ class TaskQueue {
   std::size_t next_ = 0;
 };
 
+// Times the compute of the threads of one process: from a thread's take to its put.
+class BusyClock {
+ public:
+  void taken();
+  void put(RankLoad& load, std::size_t results);
+};
+
+// The gathering process's own threads: tasks from the queue, results gathered at once, both
+// under `mutex` (shared with whatever else hands out tasks of the queue: the MPI server).
+class QueueSource : public WorkSource {
+ public:
+  QueueSource(TaskQueue& queue, const WorkLoop& loop, RankLoad& load, std::mutex& mutex)
+      : queue_(queue), loop_(loop), load_(load), mutex_(mutex) {}
+  std::vector<int> take(int max) override;
+  void put(std::vector<TaskResult> results) override;
+
+ private:
+  TaskQueue& queue_;
+  const WorkLoop& loop_;
+  RankLoad& load_;
+  BusyClock clock_;
+  std::mutex& mutex_;
+};
+
 // One process; with shards > 1 it keeps only the tasks t with t mod shards == shard (the
 // split of a scheduler job array, `--shard i/K`: stable when a shard resumes).
 class LocalDistributor : public WorkDistributor {
@@ -106,13 +130,6 @@ class LocalDistributor : public WorkDistributor {
  private:
   int shard_, shards_;
   RankLoad load_;
-};
-
-// Times the compute of the threads of one process: from a thread's take to its put.
-class BusyClock {
- public:
-  void taken();
-  void put(RankLoad& load, std::size_t results);
 };
 
 // Runs source until it is empty on `threads` OpenMP threads: each thread takes `chunk` tasks
