@@ -1,12 +1,19 @@
 // Campaigns spread over processes, end to end with the real executable: `mpirun -n 2` and
-// `-n 3` (oversubscribed on any machine), a run stopped and resumed with another number of
-// ranks, and a job array of shards joined by `unjam merge`, each against one plain process on
-// the p50 fixture: the same bytes (docs/ARCHITECTURE.md, "Campaigns").
+// `-n 3` (oversubscribed on any machine), a run stopped (--stop-after) or killed (SIGKILL)
+// and resumed with another number of ranks, and a job array of shards joined by `unjam merge`,
+// each against one plain process on the p50 fixture (the kill: a 200-disk packing, slow
+// enough to kill): the same bytes (docs/ARCHITECTURE.md, "Campaigns").
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <random>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -77,14 +84,12 @@ TEST_F(Distributed, ProbeOverTwoAndThreeRanksWritesTheBytesOfOneProcess) {
   const fs::path two = probe("two", 2), three = probe("three", 3);
   expect_same_probe_outputs(one, two);
   expect_same_probe_outputs(one, three);
-  // Every rank probed some contacts (rank 0 computes too), and the loads add up.
+  // The other ranks probed some contacts (how many depends on timing), and the loads add up.
   const auto ranks = nlohmann::json::parse(read_file(three / "probe_summary.json")).at("ranks");
   ASSERT_EQ(ranks.size(), 3u);
   long long probes = 0;
-  for (const auto& r : ranks) {
-    EXPECT_GT(r.at("probes").get<long long>(), 0) << ranks.dump();
-    probes += r.at("probes").get<long long>();
-  }
+  for (const auto& r : ranks) probes += r.at("probes").get<long long>();
+  EXPECT_GT(probes - ranks.at(0).at("probes").get<long long>(), 0) << ranks.dump();
   EXPECT_EQ(probes, nlohmann::json::parse(read_file(three / "probe_summary.json")).at("probes").get<long long>());
 }
 
@@ -99,6 +104,49 @@ TEST_F(Distributed, ProbeStoppedOnTwoRanksResumesOnThree) {
   EXPECT_LT(done, 81u);
   probe("resumed", 3);
   EXPECT_FALSE(fs::exists(out / "probe_checkpoint.json"));
+  expect_same_probe_outputs(one, out);
+}
+
+// Rows in OUT/probe_checkpoint.json (written atomically: whole or absent), 0 if none yet.
+std::size_t checkpointed_rows(const fs::path& out) {
+  const fs::path file = out / "probe_checkpoint.json";
+  if (!fs::exists(file)) return 0;
+  return nlohmann::json::parse(read_file(file)).at("state").at("rows").size();
+}
+
+// A job killed outright (SIGKILL of mpirun, as a scheduler past its limit) in the middle of a
+// campaign, then run again on another number of ranks: the bytes of one process.
+TEST_F(Distributed, ProbeKilledOnTwoRanksResumesOnThree) {
+  const fs::path packing = root_ / "p200";
+  ASSERT_EQ(shell(unjam(0, "pack --n 200 --mu 0.1 --seed 1 --threads 1 --quiet --out '" + packing.string() + "'")).exit_code, 0);
+  const std::string args = "probe '" + packing.string() + "' --sample 100 --seed 5 --method lp --threads 1 --quiet --out '";
+  const fs::path one = root_ / "one", out = root_ / "killed";
+  fs::create_directories(one);
+  fs::create_directories(out);
+  ASSERT_EQ(shell(unjam(0, args + one.string() + "'")).exit_code, 0);
+
+  const std::string job = "exec env " + unjam(2, args + out.string() + "' --checkpoint 0") + " >/dev/null 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (checkpointed_rows(out) < 10 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  // The ranks notice that mpirun is gone and exit; wait for them before resuming (the
+  // bracket keeps pgrep's own shell from matching).
+  while (shell("pgrep -f '" + root_.string() + "/[k]illed'").exit_code == 0 &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const std::size_t done = checkpointed_rows(out);
+  ASSERT_GE(done, 10u);
+  ASSERT_LT(done, 100u) << "the job ended before it was killed";
+  ASSERT_FALSE(fs::exists(out / "probes.csv"));
+
+  const CommandResult resumed = shell(unjam(3, args + out.string() + "'"));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming: "), std::string::npos) << resumed.output;
   expect_same_probe_outputs(one, out);
 }
 

@@ -1,5 +1,7 @@
 #include "unjam/campaign/distributor.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
@@ -75,9 +77,28 @@ std::string encode_request(int want, const RankLoad& load, const std::vector<Tas
   return w.take();
 }
 
+// Sleeps between polls, 20 us at first, doubling up to 1 ms while nothing comes: a blocking
+// wait of Open MPI spins, and would take a core from the probes of this node's other ranks
+// and threads (docs/benchmarks.md, "Campaigns over MPI ranks").
+class Backoff {
+ public:
+  void wait() {
+    std::this_thread::sleep_for(std::chrono::microseconds(us_));
+    us_ = std::min(2 * us_, 1000);
+  }
+
+ private:
+  int us_ = 20;
+};
+
+// The next message of `tag` from `source` (or MPI_ANY_SOURCE), polled.
 std::string receive(int source, int tag, int* from = nullptr) {
   MPI_Status status;
-  MPI_Probe(source, tag, MPI_COMM_WORLD, &status);
+  int flag = 0;
+  for (Backoff backoff;; backoff.wait()) {
+    MPI_Iprobe(source, tag, MPI_COMM_WORLD, &flag, &status);
+    if (flag) break;
+  }
   int count = 0;
   MPI_Get_count(&status, MPI_BYTE, &count);
   std::string bytes(static_cast<std::size_t>(count), '\0');
@@ -173,22 +194,14 @@ class MpiDistributor : public WorkDistributor {
   }
 
  private:
-  // Rank 0's server: answers requests until every worker has left the loop. It polls
-  // (MPI_Iprobe, then a short sleep) rather than block, since a blocking receive of Open
-  // MPI spins and would take a core from rank 0's own probes.
+  // Rank 0's server: answers requests until every worker has left the loop (polling, as
+  // every receive here, so that rank 0's own probes keep their core).
   void serve(TaskQueue& queue, const WorkLoop& loop, std::mutex& mutex, int round) {
     try {
       int left = ranks_ - 1;
       while (left > 0) {
-        int flag = 0;
-        MPI_Status status;
-        MPI_Iprobe(MPI_ANY_SOURCE, request_tag(round), MPI_COMM_WORLD, &flag, &status);
-        if (!flag) {
-          std::this_thread::sleep_for(std::chrono::microseconds(200));
-          continue;
-        }
         int from = 0;
-        const std::string msg = receive(status.MPI_SOURCE, request_tag(round), &from);
+        const std::string msg = receive(MPI_ANY_SOURCE, request_tag(round), &from);
         ByteReader r(msg);
         const int want = r.get<std::int32_t>();
         RankLoad& load = loads_[from];
@@ -246,6 +259,15 @@ void end_mpi_job(int exit_code) {
   int ranks = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   if (exit_code != 0 && ranks > 1) MPI_Abort(MPI_COMM_WORLD, exit_code);
+  // MPI_Finalize waits for every rank (spinning): the workers wait here, polled, while rank 0
+  // writes the outputs.
+  MPI_Request barrier;
+  MPI_Ibarrier(MPI_COMM_WORLD, &barrier);
+  int done = 0;
+  for (Backoff backoff;; backoff.wait()) {
+    MPI_Test(&barrier, &done, MPI_STATUS_IGNORE);
+    if (done) break;
+  }
   MPI_Finalize();
   g_started = false;
 }
