@@ -166,6 +166,27 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   expect_same_probe_outputs(one, out);
 }
 
+TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {
+  const auto bounds = [&](const std::string& name, int ranks, const std::string& extra, int expect_code) {
+    fs::create_directories(root_ / name);
+    const CommandResult r = shell(unjam(ranks, "bounds '" + kP50.string() + "' --threads 1 --out '" +
+                                               (root_ / name / "bounds.csv").string() + "' " + extra));
+    EXPECT_EQ(r.exit_code, expect_code) << r.output;
+    return root_ / name;
+  };
+  const fs::path one = bounds("one", 0, "", 0);
+  const fs::path out = bounds("resumed", 2, "--stop-after 40", 1);
+  ASSERT_FALSE(fs::exists(out / "bounds.csv"));
+  const auto saved = nlohmann::json::parse(read_file(out / "bounds_checkpoint.json"));
+  int known = 0;
+  for (const auto& v : saved.at("fn_max")) known += !v.is_null();
+  EXPECT_GE(known, 40);
+  EXPECT_LT(known, 81);
+  bounds("resumed", 3, "", 0);
+  EXPECT_FALSE(fs::exists(out / "bounds_checkpoint.json"));
+  EXPECT_EQ(read_file(one / "bounds.csv"), read_file(out / "bounds.csv"));
+}
+
 TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
   const auto bounds = [&](const std::string& name, int ranks, const std::string& extra = "") {
     fs::create_directories(root_ / name);

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -36,6 +37,8 @@ struct BoundsOptions {
   int threads = 0;          // 0: all cores
   std::string method = "barrier";
   std::string shard;        // "i/K": this job's share of a job array
+  double checkpoint_s = 30.0;  // seconds between checkpoints
+  int stop_after = 0;       // > 0: stop (checkpoint saved) after this many new LPs
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -167,6 +170,76 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
               shards, contacts.size(), file.c_str());
 }
 
+// The checkpoint of a run (or of shard i/K): OUT's directory, bounds_checkpoint[-shard-i-of-K].json.
+std::filesystem::path checkpoint_path(const BoundsOptions& opt, int shard, int shards) {
+  const std::filesystem::path dir = opt.out.empty() ? std::filesystem::path(opt.dir)
+                                                    : std::filesystem::path(opt.out).parent_path();
+  return dir / (shards > 1 ? shard_file_name("bounds_checkpoint-shard", shard, shards) : "bounds_checkpoint.json");
+}
+
+// A vector with NaN (not known yet) as JSON null, and back.
+nlohmann::json values_json(const Eigen::VectorXd& v) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const double x : v) j.push_back(std::isnan(x) ? nlohmann::json() : nlohmann::json(x));
+  return j;
+}
+Eigen::VectorXd values_of(const nlohmann::json& j) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(j.size()));
+  for (std::size_t i = 0; i < j.size(); ++i) v[i] = j[i].is_null() ? std::nan("") : j[i].get<double>();
+  return v;
+}
+
+// What identifies the run a checkpoint belongs to.
+nlohmann::json checkpoint_settings(const BoundsOptions& opt, int Nc) {
+  return {{"packing", opt.dir}, {"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method},
+          {"shard", opt.shard}, {"contacts", Nc}};
+}
+
+// The partial result saved in `file`, if there is one (and it is of this run).
+std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings) {
+  if (!std::filesystem::exists(file)) return std::nullopt;
+  const auto j = nlohmann::json::parse(read_file(file), nullptr, false);
+  if (j.is_discarded()) throw Error(file.string() + " is not valid JSON; remove it to start over");
+  if (j.value("settings", nlohmann::json{}) != settings)
+    throw Error(file.string() + " belongs to a run with other settings; remove it to start over");
+  ForceBounds b;
+  b.fn_min = values_of(j.at("fn_min"));
+  b.fn_max = values_of(j.at("fn_max"));
+  b.min_lps_skipped = j.at("min_lps_skipped").get<int>();
+  b.iterations = j.at("iterations").get<long long>();
+  b.loosened_solves = j.at("loosened_solves").get<long long>();
+  b.complete = false;
+  return b;
+}
+
+void write_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings, const ForceBounds& b) {
+  write_file_atomic(file, nlohmann::json{{"settings", settings}, {"fn_min", values_json(b.fn_min)},
+                                         {"fn_max", values_json(b.fn_max)}, {"min_lps_skipped", b.min_lps_skipped},
+                                         {"iterations", b.iterations}, {"loosened_solves", b.loosened_solves}}
+                              .dump());
+}
+
+// On the gathering process: resume from the checkpoint, save one every opt.checkpoint_s
+// seconds, stop on Ctrl-C / SIGTERM or after opt.stop_after LPs.
+void add_checkpoints(const BoundsOptions& opt, const std::filesystem::path& file, const nlohmann::json& settings,
+                     std::optional<ForceBounds>& resumed, ForceBoundsOptions& lp) {
+  resumed = read_checkpoint(file, settings);
+  if (resumed) {
+    lp.resume = &*resumed;
+    std::fprintf(stderr, "resuming from %s\n", file.c_str());
+  }
+  auto solved = std::make_shared<int>(0);
+  lp.should_stop = [&opt, solved] {
+    return InterruptGuard::requested() || (opt.stop_after > 0 && *solved >= opt.stop_after);
+  };
+  lp.checkpoint = [&opt, file, settings, solved, last = std::chrono::steady_clock::now()](const ForceBounds& b) mutable {
+    ++*solved;
+    if (seconds_since(last) < opt.checkpoint_s && !InterruptGuard::requested()) return;
+    last = std::chrono::steady_clock::now();
+    write_checkpoint(file, settings, b);
+  };
+}
+
 void run_bounds(const BoundsOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   const auto [shard, shards] = opt.shard.empty() ? std::pair{0, 1} : parse_shard(opt.shard);
@@ -177,9 +250,23 @@ void run_bounds(const BoundsOptions& opt) {
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
   BoundsRun run;
   run.t_build = seconds_since(t_start);
-  const ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
-  const ForceBounds bounds = compute_force_bounds(sys, lp, *dist);
+  ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
+  const std::filesystem::path checkpoint = checkpoint_path(opt, shard, shards);
+  const nlohmann::json settings = checkpoint_settings(opt, sys.num_contacts());
+  std::optional<ForceBounds> resumed;
+  if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, lp);
+  else lp.should_stop = InterruptGuard::requested;
+  ForceBounds bounds;
+  {
+    const InterruptGuard interrupts;
+    bounds = compute_force_bounds(sys, lp, *dist);
+  }
   if (!dist->gathers()) return;
+  if (!bounds.complete) {
+    write_checkpoint(checkpoint, settings, bounds);
+    throw Error("interrupted (" + checkpoint.string() + " saved); run the same command again to resume");
+  }
+  std::filesystem::remove(checkpoint);
   run.loads = dist->loads();
   if (shards > 1) return write_bounds_shard(opt, shard, shards, bounds, run);
   const auto t_rank = std::chrono::steady_clock::now();
@@ -208,6 +295,11 @@ void add_bounds_command(CLI::App& app) {
   cmd->add_option("--shard", opt->shard,
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");
+  cmd->add_option("--checkpoint", opt->checkpoint_s, "seconds between checkpoints (bounds_checkpoint.json beside OUT)")
+      ->capture_default_str();
+  cmd->add_option("--stop-after", opt->stop_after,
+                  "stop after this many new LPs, saving the checkpoint (as Ctrl-C; rerun to resume)")
+      ->check(CLI::NonNegativeNumber);
   cmd->callback([opt] { run_bounds(*opt); });
 }
 

@@ -258,15 +258,19 @@ void end_mpi_job(int exit_code) {
   if (!g_started) return;
   int ranks = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-  if (exit_code != 0 && ranks > 1) MPI_Abort(MPI_COMM_WORLD, exit_code);
   // MPI_Finalize waits for every rank (spinning): the workers wait here, polled, while rank 0
-  // writes the outputs.
+  // writes the outputs. After a failure, the ranks that do not come within 2 s (still in a
+  // loop, waiting for this one) are stopped by MPI_Abort; after an orderly stop (Ctrl-C,
+  // --stop-after: every rank left the loops) all come and the job ends cleanly.
   MPI_Request barrier;
   MPI_Ibarrier(MPI_COMM_WORLD, &barrier);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(2);
   int done = 0;
   for (Backoff backoff;; backoff.wait()) {
     MPI_Test(&barrier, &done, MPI_STATUS_IGNORE);
     if (done) break;
+    if (exit_code != 0 && ranks > 1 && std::chrono::steady_clock::now() > deadline)
+      MPI_Abort(MPI_COMM_WORLD, exit_code);
   }
   MPI_Finalize();
   g_started = false;

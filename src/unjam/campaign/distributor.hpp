@@ -27,9 +27,9 @@ std::unique_ptr<WorkDistributor> make_distributor(int shard = 0, int shards = 1)
 // Parses "i/K" of --shard into (i, K); throws unjam::Error for anything else.
 std::pair<int, int> parse_shard(const std::string& text);
 
-// Ends the MPI job of this process, if one was started: MPI_Finalize after success, and after
-// a failure (exit_code != 0) MPI_Abort of every rank, which otherwise may wait for this one
-// forever. Nothing without MPI.
+// Ends the MPI job of this process, if one was started: MPI_Finalize once every rank is
+// here; after a failure (exit_code != 0), MPI_Abort of every rank if they are not all here
+// within 2 s (the others may wait for this one forever). Nothing without MPI.
 void end_mpi_job(int exit_code);
 
 }  // namespace unjam

@@ -226,15 +226,27 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
                                  WorkDistributor& distributor) {
   const auto t_start = std::chrono::steady_clock::now();
   const int Nc = system.num_contacts();
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
   ForceBounds bounds;
-  bounds.fn_min = Eigen::VectorXd::Constant(Nc, std::numeric_limits<double>::infinity());
-  bounds.fn_max.resize(Nc);
+  bounds.fn_min = Eigen::VectorXd::Constant(Nc, unknown);
+  bounds.fn_max = Eigen::VectorXd::Constant(Nc, unknown);
   if (options.keep_networks_at_max) bounds.network_at_max.resize(Nc);
   const double open_tol = options.open_tol_F0 * system.F0;
+  const ForceBounds* resume = options.resume;
+  if (resume && (options.keep_networks_at_max || resume->fn_min.size() != Nc || resume->fn_max.size() != Nc))
+    throw Error("force bounds: the partial result to resume from is of another contact set");
 
   const ForceLP base(system, options.method, options.tolerance);  // throws if the set is empty
   bounds.iterations = base.iterations();
   int done = 0;
+  if (resume) {
+    bounds.fn_min = resume->fn_min;
+    bounds.fn_max = resume->fn_max;
+    bounds.iterations = resume->iterations;
+    bounds.loosened_solves = resume->loosened_solves;
+    bounds.min_lps_skipped = resume->min_lps_skipped;
+    done = static_cast<int>(Nc - bounds.fn_min.array().isNaN().count() + Nc - bounds.fn_max.array().isNaN().count());
+  }
   const int total = 2 * Nc;  // LPs, the minima certified without one counted as done
   const int threads = std::max(1, options.threads);
   // Contiguous chunks for the simplex (neighbouring contacts share grains: the previous
@@ -245,23 +257,40 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
   // process knows every network; each process also marks those of its own LPs, so that it
   // skips them before the gathering process could tell it.
   std::vector<char> opened(Nc, 0);
+  for (int k = 0; k < Nc; ++k) opened[k] = bounds.fn_min[k] == 0.0;
   std::vector<std::atomic<char>> opened_here(Nc);
   for (std::atomic<char>& o : opened_here) o = 0;
   const auto mark = [&](const LpOutcome& o) {
     for (const int j : o.opened) opened[j] = 1;
   };
+  // What a resume needs: the values known, and fn_min = 0 where a network opened the contact.
+  const auto partial = [&] {
+    ForceBounds p = bounds;
+    for (int k = 0; k < Nc; ++k)
+      if (opened[k] && std::isnan(p.fn_min[k])) {
+        p.fn_min[k] = 0.0;
+        ++p.min_lps_skipped;
+      }
+    p.complete = false;
+    return p;
+  };
   const auto count = [&](const LpOutcome& o) {
     bounds.iterations += o.iterations;
     bounds.loosened_solves += o.loosened;
     if (options.progress) options.progress(++done, total);
+    if (options.checkpoint) options.checkpoint(partial());
   };
   const auto make_lp = [&] { return ForceLP(base); };  // own model and basis per thread
 
   // Phase 1: fn_max of every contact; each argmax network certifies the contacts it opens.
-  std::vector<int> all;
+  std::vector<int> all, maxima_todo;
   if (distributor.gathers())
-    for (int k = 0; k < Nc; ++k) all.push_back(k);
+    for (int k = 0; k < Nc; ++k) {
+      all.push_back(k);
+      if (std::isnan(bounds.fn_max[k])) maxima_todo.push_back(k);
+    }
   WorkLoop maxima;
+  maxima.should_stop = options.should_stop;
   maxima.work = [&](WorkSource& source) {
     work_off(source, threads, chunk, make_lp, [&](ForceLP& lp, int k) {
       return encode(solve_lp(lp, open_tol, options.keep_networks_at_max,
@@ -279,13 +308,15 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
                                          Eigen::Map<const Eigen::VectorXd>(o.ft.data(), Nc)};
     }
   };
-  distributor.run(all, maxima);
+  bool complete = distributor.run(maxima_todo, maxima);
 
   // Phase 2: the min LP of every other contact, in order; each optimal network may open
   // contacts still queued, whose LPs are then skipped (which ones depends on the order, the
   // values do not: a minimum at or below open_tol is reported as 0).
+  // (Run also after a stop, which hands out nothing: every process takes part in each loop.)
   std::vector<int> todo;
   for (const int k : all) {
+    if (!std::isnan(bounds.fn_min[k])) continue;  // known from the run resumed
     if (opened[k]) {
       bounds.fn_min[k] = 0.0;
       ++bounds.min_lps_skipped;
@@ -295,6 +326,7 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
     }
   }
   WorkLoop minima;
+  minima.should_stop = options.should_stop;
   minima.skip = [&](int k) {
     if (!opened[k]) return false;
     bounds.fn_min[k] = 0.0;
@@ -320,8 +352,9 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
       count(o);
     }
   };
-  distributor.run(todo, minima);
-  if (options.progress && distributor.gathers()) options.progress(total, total);
+  complete = distributor.run(todo, minima) && complete;
+  if (distributor.gathers() && !complete) bounds = partial();
+  if (options.progress && distributor.gathers() && complete) options.progress(total, total);
   bounds.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return bounds;

@@ -99,6 +99,8 @@ class ForceLP {
   bool last_loosened_ = false;
 };
 
+struct ForceBounds;
+
 struct ForceBoundsOptions {
   int threads = 1;                  // OpenMP threads, one ForceLP copy each
   LpMethod method = LpMethod::barrier;
@@ -109,6 +111,14 @@ struct ForceBoundsOptions {
   double open_tol_F0 = 1e-9;
   // Called with (LPs done, total = 2 N_c) after every LP, one call at a time; may be empty.
   std::function<void(int, int)> progress;
+  // Polled before LPs are handed out; once true no more are, and the result is incomplete
+  // (ForceBounds::complete false). May be empty.
+  std::function<bool()> should_stop;
+  // Called after every LP with what is known so far (see ForceBounds::complete); may be empty.
+  std::function<void(const ForceBounds&)> checkpoint;
+  // A partial result to resume from (a checkpoint's; not with keep_networks_at_max): its
+  // known values are kept, the LPs of the others are solved.
+  const ForceBounds* resume = nullptr;
 };
 
 struct ForceBounds {
@@ -118,6 +128,9 @@ struct ForceBounds {
   long long iterations = 0;                  // solver iterations over all LPs
   long long loosened_solves = 0;  // LPs solved at looser tolerances (ForceLP::loosened_solves)
   double seconds = 0.0;                      // wall time of all LPs (model build included)
+  // false if should_stop stopped the LPs: then NaN marks the values not known yet, and
+  // fn_min = 0 every contact some optimal network opened (what a resume needs).
+  bool complete = true;
 };
 
 // Both ends of every contact's interval. Every optimal network is admissible, so a contact
