@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
-  libeigen3-dev coinor-libclp-dev libmetis-dev libcli11-dev nlohmann-json3-dev
+  libeigen3-dev coinor-libclp-dev libmetis-dev libsuitesparse-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   python3-siconos

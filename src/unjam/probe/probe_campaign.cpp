@@ -10,6 +10,7 @@
 
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 
 namespace unjam {
@@ -26,6 +27,7 @@ struct Worker {
   ProbeResult probe(const Packing& p, const CampaignSettings& s, int contact) {
     if (s.method == ProbeMethod::kNlgs) return probe_nlgs(p, contact, s.nlgs);
     if (s.method == ProbeMethod::kLemke) return probe_cd_lemke(p, contact, s.nlgs).result;
+    if (s.method == ProbeMethod::kCd) return probe_cd_path(p, contact, s.nlgs).result;
     if (!kinematic) kinematic = std::make_unique<KinematicProbe>(p, s.kinematic);
     return kinematic->probe(contact);
   }
@@ -59,14 +61,15 @@ const char* method_name(ProbeMethod method) {
     case ProbeMethod::kLp: return "lp";
     case ProbeMethod::kNlgs: return "nlgs";
     case ProbeMethod::kLemke: return "lemke";
+    case ProbeMethod::kCd: return "cd";
   }
   return "?";
 }
 
 ProbeMethod method_from_name(const std::string& name) {
-  for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke})
+  for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke, ProbeMethod::kCd})
     if (name == method_name(m)) return m;
-  throw Error("--method must be lp, nlgs or lemke (got '" + name + "')");
+  throw Error("--method must be lp, nlgs, lemke or cd (got '" + name + "')");
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {

@@ -24,9 +24,10 @@ enum class ProbeMethod {
   kLp,    // F_crit = LP maximum, field = kinematic problem at the optimum (fast)
   kNlgs,  // the paper's contact-dynamics probe (reference, slow)
   kLemke, // the same step solved exactly by Lemke's method (dense: small packings)
+  kCd,    // the same step followed exactly from the static network (sparse: probe/cd_path)
 };
 
-// "lp", "nlgs", "lemke"; method_from_name throws unjam::Error for any other name.
+// "lp", "nlgs", "lemke", "cd"; method_from_name throws unjam::Error for any other name.
 const char* method_name(ProbeMethod method);
 ProbeMethod method_from_name(const std::string& name);
 
