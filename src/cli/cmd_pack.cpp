@@ -68,11 +68,8 @@ void run(PackOptions& o) {
       p.meta.P_ext = o.P_ext;
     }
   }
-  o.compaction.dynamics.bath.P_ext = p.meta.P_ext;
-  validate(o.compaction, p.meta.mu);
+  prepare_compaction(p, o.compaction, o.gas, o.command);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  p.meta.settings = to_json(o.compaction, o.gas);
-  p.meta.command = o.command;
 
   CompactionHooks hooks;
   if (!o.quiet) {

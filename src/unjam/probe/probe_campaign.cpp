@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -11,6 +12,7 @@
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/probe/cd_step.hpp"
+#include "unjam/protocol/settings_json.hpp"
 
 namespace unjam {
 namespace {
@@ -67,6 +69,23 @@ ProbeMethod method_from_name(const std::string& name) {
   for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke})
     if (name == method_name(m)) return m;
   throw Error("--method must be lp, nlgs or lemke (got '" + name + "')");
+}
+
+CampaignSettings campaign_settings_for(const Packing& p) {
+  CompactionSettings cs;
+  GasSettings gas;
+  from_json(p.meta.settings, cs, gas);
+  CampaignSettings s;
+  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
+  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  return s;
+}
+
+void validate(const CampaignSettings& s) {
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
+      !positive(s.nlgs.velocity_tol))
+    throw Error("the probe's g, dt and velocity_tol must be positive");
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {

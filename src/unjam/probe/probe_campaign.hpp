@@ -73,6 +73,13 @@ struct CampaignSummary {
   std::string fit_error;             // why there is no fit (e.g. cell too small)
 };
 
+// The settings `unjam probe` starts from: the defaults, with the packing's touch gap (of its
+// static solve) and bath mass M_lambda, as recorded in meta.settings.
+CampaignSettings campaign_settings_for(const Packing& packing);
+
+// Throws unjam::Error unless g, dt and velocity_tol are positive and finite.
+void validate(const CampaignSettings& settings);
+
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
 

@@ -62,4 +62,12 @@ void from_json(const nlohmann::json& j, CompactionSettings& s, GasSettings& g) {
   }
 }
 
+void prepare_compaction(Packing& p, CompactionSettings& settings, const GasSettings& gas,
+                        const std::string& command) {
+  settings.dynamics.bath.P_ext = p.meta.P_ext;
+  validate(settings, p.meta.mu);
+  p.meta.settings = to_json(settings, gas);
+  p.meta.command = command;
+}
+
 }  // namespace unjam
