@@ -21,6 +21,17 @@ def read(path):
     return reader.GetOutput()
 
 
+def plain_actor(port, color):
+    """An actor of one colour for the output of a filter."""
+    mapper = vtk.vtkPolyDataMapper()
+    mapper.SetInputConnection(port)
+    mapper.ScalarVisibilityOff()
+    actor = vtk.vtkActor()
+    actor.SetMapper(mapper)
+    actor.GetProperty().SetColor(*color)
+    return actor
+
+
 def grains(poly):
     """Disks of the grains (not the periodic images) as outlines, radius from the 'radius' array."""
     real = vtk.vtkThresholdPoints()
@@ -38,14 +49,7 @@ def grains(poly):
     glyph.SetSourceConnection(circle.GetOutputPort())
     glyph.SetScaleModeToScaleByScalar()
     glyph.SetScaleFactor(1.0)
-    glyph.SetColorModeToColorByScale()
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputConnection(glyph.GetOutputPort())
-    mapper.ScalarVisibilityOff()
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    actor.GetProperty().SetColor(0.55, 0.55, 0.6)
-    return actor, real.GetOutput()
+    return plain_actor(glyph.GetOutputPort(), (0.55, 0.55, 0.6)), real.GetOutput()
 
 
 def force_chains(poly):
@@ -86,24 +90,13 @@ def displacement_arrows(real):
     glyph.SetScaleModeToScaleByVector()
     glyph.SetScaleFactor(4.0 / largest)  # the largest arrow: 4 R_max
     glyph.OrientOn()
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputConnection(glyph.GetOutputPort())
-    mapper.ScalarVisibilityOff()
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    actor.GetProperty().SetColor(0.75, 0.1, 0.1)
-    return actor
+    return plain_actor(glyph.GetOutputPort(), (0.75, 0.1, 0.1))
 
 
 def cell_outline(Lx, Ly):
     box = vtk.vtkOutlineSource()
     box.SetBounds(0, Lx, 0, Ly, 0, 0)
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputConnection(box.GetOutputPort())
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    actor.GetProperty().SetColor(0, 0, 0)
-    return actor
+    return plain_actor(box.GetOutputPort(), (0, 0, 0))
 
 
 def title(text):

@@ -124,3 +124,25 @@ def test_bad_input_is_refused(exports, tmp_path):
     r = tool("export", FIXTURE, "--format", "xyz", "--field", tmp_path / "short.csv", "--out", tmp_path / "x.xyz")
     assert r.returncode == 1 and "1 grains, the packing has 50" in r.stderr
     assert not (tmp_path / "x.vtp").exists() and not (tmp_path / "x.xyz").exists()
+
+
+def test_render_script_draws_the_export(exports, tmp_path):
+    """scripts/render_export.py (VTK, under Xvfb) makes a picture of both panels."""
+    d, p, u = exports
+    script = Path(__file__).parent.parent / "scripts" / "render_export.py"
+    r = subprocess.run(["xvfb-run", "-a", "/usr/bin/python3", str(script), str(d / "probe.vtp"),
+                        str(tmp_path / "pic.png"), "--size", "200"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    png = vtk.vtkPNGReader()
+    png.SetFileName(str(tmp_path / "pic.png"))
+    png.Update()
+    image = png.GetOutput()
+    assert image.GetDimensions()[:2] == (400, 200)
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars())
+    left, right = pixels.reshape(200, 400, -1)[:, :200], pixels.reshape(200, 400, -1)[:, 200:]
+    # Coloured force chains on the left (red and blue ends of the map), dark red arrows on the right.
+    assert (left[..., 0] > 200).any() and (left[..., 2] > 200).any() and (left[..., 1] < 100).any()
+    assert ((right[..., 0] > 120) & (right[..., 1] < 60)).any()
+    r = subprocess.run(["/usr/bin/python3", str(script), str(tmp_path / "missing.vtp"), "x.png"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
