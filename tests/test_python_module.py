@@ -105,9 +105,16 @@ def test_probe_equals_tool_bit_for_bit(tmp_path, p50):
     # F_crit at full precision: the tool's probes.csv of a sample, the module on its contacts.
     tool("probe", FIXTURE, "--sample", 3, "--out", tmp_path, "--quiet")
     sample = read_csv(tmp_path / "probes.csv")
-    results = unjam.probe(p50, contacts=[int(x["contact"]) for x in sample])
-    assert [float(x["f_crit"]) for x in sample] == [q.f_crit for q in results]
-    assert [float(x["f_cont"]) for x in sample] == [q.f_cont for q in results]
+    ks = np.array([int(x["contact"]) for x in sample] + [3])  # any sequence of ints, numpy too
+    results = unjam.probe(p50, contacts=ks, threads=2)
+    assert [q.contact for q in results] == ks.tolist()
+    assert [float(x["f_crit"]) for x in sample] == [q.f_crit for q in results[:-1]]
+    assert [float(x["f_cont"]) for x in sample] == [q.f_cont for q in results[:-1]]
+    assert results[-1].u.tolist() == r.u.tolist() and results[-1].f_crit == r.f_crit
+    # In parallel, each thread reusing its LP model: the same bytes for any thread count.
+    serial = unjam.probe(p50, contacts=ks[::-1], threads=1)[::-1]
+    assert [q.f_crit for q in serial] == [q.f_crit for q in results]
+    assert all(np.array_equal(q.u, s.u) and np.array_equal(q.rot, s.rot) for q, s in zip(results, serial))
 
 
 def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
@@ -157,6 +164,10 @@ def test_bad_arguments_raise(p50, tmp_path):
         unjam.probe(p50)
     with pytest.raises(unjam.Error, match="the packing has 82 contacts"):
         unjam.probe(p50, contact=82)
+    with pytest.raises(unjam.Error, match="contact -1: the packing has 82"):
+        unjam.probe(p50, contacts=[0, -1])
+    with pytest.raises(unjam.Error, match="threads"):
+        unjam.probe(p50, contact=0, threads=-2)
     with pytest.raises(unjam.Error, match="lp, nlgs or lemke"):
         unjam.probe(p50, contact=0, method="simplex")
     with pytest.raises(unjam.Error, match="must be positive"):

@@ -80,23 +80,20 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   return s;
 }
 
-// One probe per contact, in order, with a Ctrl-C check between probes.
+// probe_contacts (in parallel, Ctrl-C checked between batches): a ProbeResult for contact=K,
+// a list in the order of contacts=[...].
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
-                 const std::string& method, double g, double dt, double velocity_tol, long long max_sweeps) {
+                 const std::string& method, double g, double dt, double velocity_tol, long long max_sweeps,
+                 int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  for (const int k : list)
-    if (k < 0 || k >= static_cast<int>(p.contacts.size()))
-      throw Error("contact " + std::to_string(k) + ": the packing has " + std::to_string(p.contacts.size()) + " contacts");
   const CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   {
     py::gil_scoped_release release;
-    for (const int k : list) {
-      if (poll()) break;
-      results.push_back(probe_contact(p, s, k));
-    }
+    const ThreadCount count(threads);
+    results = probe_contacts(p, s, list, [&poll] { return poll(); });
   }
   poll.rethrow_if_interrupted();
   if (contact) return py::cast(std::move(results.front()));
@@ -228,8 +225,9 @@ void bind_compute(py::module_& m) {
   m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
         py::arg("g") = cd.nlgs.g, py::arg("dt") = cd.nlgs.dt, py::arg("velocity_tol") = cd.nlgs.velocity_tol,
-        py::arg("max_sweeps") = cd.nlgs.max_sweeps,
-        "probe contact=K (a ProbeResult) or contacts=[...] (a list), as `unjam probe --contact K`");
+        py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("threads") = 0,
+        "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
+        "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

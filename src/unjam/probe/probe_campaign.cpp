@@ -54,6 +54,30 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
   average.add_probe(r.contact, field, r.g);
 }
 
+// Probes contacts[0, n) in parallel, one probe per thread at a time on the thread's worker
+// (workers.size() == omp_get_max_threads()); the results in the order of `contacts`. An
+// exception may not leave an OpenMP loop: errors are collected and the first one rethrown.
+std::vector<ProbeResult> probe_batch(const Packing& p, const CampaignSettings& s,
+                                     std::vector<Worker>& workers, const int* contacts, int n) {
+  std::vector<std::optional<ProbeResult>> results(n);
+  std::vector<std::string> errors(n);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int j = 0; j < n; ++j) {
+    try {
+      results[j] = workers[omp_get_thread_num()].probe(p, s, contacts[j]);
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+    }
+  }
+  std::vector<ProbeResult> out;
+  out.reserve(n);
+  for (int j = 0; j < n; ++j) {
+    if (!results[j]) throw Error("probe of contact " + std::to_string(contacts[j]) + ": " + errors[j]);
+    out.push_back(std::move(*results[j]));
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* method_name(ProbeMethod method) {
@@ -107,6 +131,26 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
   return w.probe(p, s, contact);
 }
 
+std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings& s,
+                                        const std::vector<int>& contacts,
+                                        const std::function<bool()>& should_stop) {
+  const int M = static_cast<int>(p.contacts.size());
+  for (const int k : contacts)
+    if (k < 0 || k >= M)
+      throw Error("contact " + std::to_string(k) + ": the packing has " + std::to_string(M) + " contacts");
+  const int threads = omp_get_max_threads();
+  std::vector<Worker> workers(threads);
+  std::vector<ProbeResult> results;
+  results.reserve(contacts.size());
+  const std::size_t batch = 2 * static_cast<std::size_t>(threads);
+  for (std::size_t start = 0; start < contacts.size(); start += batch) {
+    if (should_stop && should_stop()) break;
+    const int n = static_cast<int>(std::min(batch, contacts.size() - start));
+    for (ProbeResult& r : probe_batch(p, s, workers, contacts.data() + start, n)) results.push_back(std::move(r));
+  }
+  return results;
+}
+
 bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
                   const CampaignHooks& hooks) {
   const std::vector<int> all = campaign_targets(p, s);
@@ -124,20 +168,9 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   for (std::size_t start = 0; start < todo.size(); start += batch) {
     if (hooks.should_stop && hooks.should_stop()) return false;
     const int n = static_cast<int>(std::min<std::size_t>(batch, todo.size() - start));
-    std::vector<std::optional<ProbeResult>> results(n);
-    std::vector<std::string> errors(n);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int j = 0; j < n; ++j) {
-      try {
-        results[j] = workers[omp_get_thread_num()].probe(p, s, todo[start + j]);
-      } catch (const std::exception& e) {
-        errors[j] = e.what();
-      }
-    }
-    for (int j = 0; j < n; ++j) {
-      if (!results[j]) throw Error("probe of contact " + std::to_string(todo[start + j]) + ": " + errors[j]);
-      if (results[j]->residual != kNoSolution) add_to_average(p, s, loaded, *results[j], state.average);
-      state.rows.push_back(row_of(*results[j]));
+    for (const ProbeResult& r : probe_batch(p, s, workers, todo.data() + start, n)) {
+      if (r.residual != kNoSolution) add_to_average(p, s, loaded, r, state.average);
+      state.rows.push_back(row_of(r));
     }
     std::sort(state.rows.begin(), state.rows.end(),
               [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });

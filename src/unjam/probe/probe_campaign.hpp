@@ -90,6 +90,16 @@ bool run_campaign(const Packing& packing, const CampaignSettings& settings, Camp
 // Probes one contact with the campaign's method.
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
 
+// Probes every contact of `contacts` (indices into packing.contacts, any order, repeats
+// allowed) with the campaign's method, on omp_get_max_threads() threads as run_campaign does
+// (one probe per thread at a time; each thread keeps its LP model): the results in the order
+// of `contacts`, the same bytes for any thread count. should_stop (may be empty) is polled
+// from the calling thread before every batch of 2 probes per thread; once it returns true,
+// the results so far are returned. Throws unjam::Error for an index out of range.
+std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
+                                        const std::vector<int>& contacts,
+                                        const std::function<bool()>& should_stop = {});
+
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
                           std::optional<FitWindow> window = std::nullopt,
