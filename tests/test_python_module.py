@@ -204,3 +204,23 @@ def test_ctrl_c_stops_a_long_pack(tmp_path):
     assert proc.returncode != 0 and "KeyboardInterrupt" in err
     meta = json.loads((tmp_path / "p" / "meta.json").read_text())
     assert meta["state"]["static"] is False and meta["state"]["step"] > 0
+
+
+def test_ctrl_c_stops_bounds():
+    """SIGINT during the LPs of bounds (ForceBoundsOptions::should_stop): KeyboardInterrupt
+    within seconds, long before the ~600 LPs of a 150-disk packing are done."""
+    code = ("import unjam\n"
+            "p = unjam.pack(n=150, seed=3, threads=1)\n"
+            "print('ready', flush=True)\n"
+            "unjam.bounds(p, threads=2)\n"
+            "print('done', flush=True)\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+    assert proc.stdout.readline() == "ready\n", proc.stderr.read()
+    time.sleep(0.3)
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert time.monotonic() - sent < 5.0
+    assert proc.returncode != 0 and "KeyboardInterrupt" in err and "line 4" in err  # in bounds
+    assert "done" not in out
