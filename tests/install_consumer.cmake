@@ -1,7 +1,9 @@
 # cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DCXX_FLAGS=... -DEXE_LINKER_FLAGS=...]
-#       -P tests/install_consumer.cmake
+#       [-DPYTHON_DIR=lib/python3.X/dist-packages] -P tests/install_consumer.cmake
+# (No ';' in the commands given to run(): ARGN would split them.)
 # Installs the build into WORK_DIR/prefix, builds tests/consumer against the installed package
-# (find_package(unjam), unjam::core) and runs it on a fixture packing.
+# (find_package(unjam), unjam::core) and runs it on a fixture packing; with PYTHON_DIR, imports
+# the installed Python module from there.
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "${var} is not set")
@@ -28,3 +30,11 @@ endif()
 message("consumer: ${out}")
 run(${WORK_DIR}/prefix/bin/unjam --version)
 message("installed tool: ${out}")
+if(PYTHON_DIR)
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${WORK_DIR}/prefix/${PYTHON_DIR} /usr/bin/python3 -c
+      "import unjam\np = unjam.read_packing('${SOURCE_DIR}/tests/fixtures/p50-mu0.1')\nprint(unjam.__file__, p.N)")
+  if(NOT out MATCHES "^${WORK_DIR}/prefix/${PYTHON_DIR}/unjam.*\\.so 50\n$")
+    message(FATAL_ERROR "unexpected output of the installed Python module: ${out}")
+  endif()
+  message("installed module: ${out}")
+endif()
