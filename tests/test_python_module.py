@@ -224,3 +224,20 @@ def test_ctrl_c_stops_bounds():
     assert time.monotonic() - sent < 5.0
     assert proc.returncode != 0 and "KeyboardInterrupt" in err and "line 4" in err  # in bounds
     assert "done" not in out
+
+
+def test_pack_progress_callback_and_its_exception():
+    """progress gets the compaction's report every 2 s; an exception it raises stops the
+    compaction and reaches the caller."""
+    reports = []
+
+    def progress(report):
+        reports.append(report)
+        raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        unjam.pack(n=4000, seed=1, threads=1, progress=progress)
+    assert len(reports) == 1
+    r = reports[0]
+    assert r["step"] > 0 and 0.0 < r["phi"] < 1.0 and r["elapsed_s"] >= 2.0 and r["contacts"] >= 0
+    assert set(r) >= {"time", "P_in_over_P_ext", "v_mean", "sweeps_per_step", "eta_s", "static_attempts"}

@@ -33,7 +33,23 @@ struct PackArgs {
   double mu = 0.1, P_ext = 1.0;
   int threads = 0;
   std::optional<std::filesystem::path> out;
+  std::optional<py::function> progress;  // called every 2 s with a dict (CompactionProgress)
 };
+
+py::dict progress_dict(const CompactionProgress& g) {
+  py::dict d;
+  d["step"] = g.step;
+  d["time"] = g.time;
+  d["phi"] = g.phi;
+  d["P_in_over_P_ext"] = g.P_ratio;
+  d["v_mean"] = g.v_mean;
+  d["sweeps_per_step"] = g.sweeps_per_step;
+  d["contacts"] = g.contacts;
+  d["elapsed_s"] = g.elapsed_s;
+  d["eta_s"] = g.eta_s < 0.0 ? py::object(py::none()) : py::object(py::float_(g.eta_s));
+  d["static_attempts"] = g.static_attempts;
+  return d;
+}
 
 std::string pack_command(const PackArgs& a) {
   char buf[256];
@@ -44,6 +60,7 @@ std::string pack_command(const PackArgs& a) {
 
 // `unjam pack --n ... --out OUT` from a gas: the packing, static. With `out`, checkpoints
 // and the result (also a stopped run, to resume with `unjam pack --resume OUT`) go there.
+// An exception of the progress callback stops the compaction and is raised.
 Packing pack(PackArgs a) {
   Packing p = make_gas(a.gas);
   p.meta.mu = a.mu;
@@ -51,11 +68,21 @@ Packing pack(PackArgs a) {
   prepare_compaction(p, a.compaction, a.gas, pack_command(a));
   SignalPoll poll;
   CompactionResult r;
+  std::optional<py::error_already_set> callback_error;
   {
     py::gil_scoped_release release;
     const ThreadCount threads(a.threads);
     CompactionHooks hooks;
-    hooks.should_stop = [&poll] { return poll(); };
+    hooks.should_stop = [&] { return callback_error.has_value() || poll(); };
+    if (a.progress)
+      hooks.progress = [&](const CompactionProgress& g) {
+        py::gil_scoped_acquire gil;
+        try {
+          (*a.progress)(progress_dict(g));
+        } catch (py::error_already_set& e) {
+          callback_error = std::move(e);
+        }
+      };
     if (a.out) {
       hooks.checkpoint = [&a](const Packing& q) { write_packing(*a.out, q); };
       hooks.checkpoint_s = 60.0;
@@ -63,6 +90,7 @@ Packing pack(PackArgs a) {
     r = compact(p, a.compaction, hooks);
     if (a.out) write_packing(*a.out, p);
   }
+  if (callback_error) throw std::move(*callback_error);
   poll.rethrow_if_interrupted();
   if (!r.is_static) throw Error("no static packing within max_steps");
   return p;
@@ -197,7 +225,8 @@ void bind_compute(py::module_& m) {
   const CampaignSettings cd;
   m.def("pack", [](int n, double mu, std::uint64_t seed, int threads, double p_ext, double phi_gas,
                    double dt, double m_lambda, double tol, int max_sweeps, double static_tol,
-                   std::int64_t max_steps, std::optional<std::filesystem::path> out) {
+                   std::int64_t max_steps, std::optional<std::filesystem::path> out,
+                   std::optional<py::function> progress) {
           PackArgs a;
           a.gas.N = n;
           a.gas.seed = seed;
@@ -206,6 +235,7 @@ void bind_compute(py::module_& m) {
           a.P_ext = p_ext;
           a.threads = threads;
           a.out = std::move(out);
+          a.progress = std::move(progress);
           auto& d = a.compaction.dynamics;
           d.dt = dt;
           d.bath.M_lambda = m_lambda;
@@ -220,8 +250,10 @@ void bind_compute(py::module_& m) {
         py::arg("dt") = pd.compaction.dynamics.dt, py::arg("m_lambda") = pd.compaction.dynamics.bath.M_lambda,
         py::arg("tol") = pd.compaction.dynamics.nlgs.tol, py::arg("max_sweeps") = pd.compaction.dynamics.nlgs.max_sweeps,
         py::arg("static_tol") = pd.compaction.final_solve.tol, py::arg("max_steps") = pd.compaction.max_steps,
-        py::arg("out") = py::none(),
-        "compact a gas of n disks into a static packing, as `unjam pack` (same seed, same bytes)");
+        py::arg("out") = py::none(), py::arg("progress") = py::none(),
+        "compact a gas of n disks into a static packing, as `unjam pack` (same seed, same bytes); "
+        "progress: a callable given a dict (step, time, phi, P_in_over_P_ext, v_mean, contacts, "
+        "elapsed_s, eta_s, ...) every 2 s");
   m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
         py::arg("g") = cd.nlgs.g, py::arg("dt") = cd.nlgs.dt, py::arg("velocity_tol") = cd.nlgs.velocity_tol,
