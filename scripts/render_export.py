@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Renders an `unjam export --format vtk --probe K` file with VTK, as ParaView would show it:
 left, the grains and the force chains (contact lines coloured by fn / F0); right, the probe's
-displacement field u / g as arrows. The picture in docs/packing-format.md ("Exports") is made
+displacement field u / g as arrows, the probed contact in black. The picture in docs/packing-format.md ("Exports") is made
 by this script. VTK renders through an X server; on a machine without a display run it
 under Xvfb (Debian xvfb):
 
@@ -71,6 +71,7 @@ def force_chains(poly):
     bar.SetLookupTable(lut)
     bar.SetTitle("fn / F0")
     bar.SetNumberOfLabels(4)
+    bar.SetVerticalTitleSeparation(12)
     bar.SetWidth(0.07)
     bar.SetHeight(0.5)
     bar.SetPosition(0.9, 0.25)
@@ -91,6 +92,20 @@ def displacement_arrows(real):
     glyph.SetScaleFactor(4.0 / largest)  # the largest arrow: 4 R_max
     glyph.OrientOn()
     return plain_actor(glyph.GetOutputPort(), (0.75, 0.1, 0.1))
+
+
+def probed_contact(poly, contact):
+    """The probed contact's line, thick and black, where the probe opens the packing."""
+    one = vtk.vtkThreshold()
+    one.SetInputData(poly)
+    one.SetInputArrayToProcess(0, 0, 0, vtk.vtkDataObject.FIELD_ASSOCIATION_CELLS, "contact")
+    one.SetLowerThreshold(contact - 0.5)
+    one.SetUpperThreshold(contact + 0.5)
+    surface = vtk.vtkGeometryFilter()
+    surface.SetInputConnection(one.GetOutputPort())
+    actor = plain_actor(surface.GetOutputPort(), (0, 0, 0))
+    actor.GetProperty().SetLineWidth(6.0)
+    return actor
 
 
 def cell_outline(Lx, Ly):
@@ -129,8 +144,9 @@ def main():
     window.SetSize(2 * args.size, args.size)
     panels = [
         ([disks, chains, cell_outline(Lx, Ly), bar], "force chains (contact lines, fn / F0)"),
-        ([grains(poly)[0], displacement_arrows(real), cell_outline(Lx, Ly)],
-         f"probe of contact {contact}: displacement u / g"),
+        ([grains(poly)[0], displacement_arrows(real), probed_contact(poly, contact),
+          cell_outline(Lx, Ly)],
+         f"probe of contact {contact} (black): displacement u / g"),
     ]
     for i, (actors, text) in enumerate(panels):
         renderer = vtk.vtkRenderer()
