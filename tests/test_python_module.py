@@ -241,3 +241,22 @@ def test_pack_progress_callback_and_its_exception():
     r = reports[0]
     assert r["step"] > 0 and 0.0 < r["phi"] < 1.0 and r["elapsed_s"] >= 2.0 and r["contacts"] >= 0
     assert set(r) >= {"time", "P_in_over_P_ext", "v_mean", "sweeps_per_step", "eta_s", "static_attempts"}
+
+
+def test_relax_equals_tool_from(tmp_path, p50):
+    """unjam.relax(p, mu=...) is `unjam pack --from DIR --mu ...`: the same bytes."""
+    tool("pack", "--from", FIXTURE, "--mu", 0.4, "--p-ext", 2.0, "--out", tmp_path / "cli", "--quiet")
+    before = np.array(p50.contacts.fn)
+    q = unjam.relax(p50, mu=0.4, p_ext=2.0)
+    assert q.mu == 0.4 and q.P_ext == 2.0 and q.is_static and q.seed == p50.seed
+    assert np.array_equal(p50.contacts.fn, before) and p50.mu == 0.1  # the packing given stays
+    q.write(tmp_path / "py")
+    for table in ("particles.csv", "contacts.csv"):
+        assert (tmp_path / "cli" / table).read_bytes() == (tmp_path / "py" / table).read_bytes()
+    cli_meta = json.loads((tmp_path / "cli" / "meta.json").read_text())
+    py_meta = json.loads((tmp_path / "py" / "meta.json").read_text())
+    assert py_meta.pop("command") == "python: unjam.relax(packing, mu=0.40000000000000002, p_ext=2, threads=0)"
+    cli_meta.pop("command")
+    assert cli_meta == py_meta
+    with pytest.raises(TypeError):
+        unjam.relax(p50)  # mu is required

@@ -59,9 +59,7 @@ void run(PackOptions& o) {
     if (o.out.empty()) throw Error("--out is required (or --resume DIR)");
     if (!o.from.empty()) {
       p = read_packing(o.from);
-      from_json(p.meta.settings, o.compaction, o.gas);
-      p.meta.mu = o.mu;
-      p.meta.P_ext = o.P_ext;
+      prepare_relaxation(p, o.mu, o.P_ext, o.compaction, o.gas);
     } else {
       p = make_gas(o.gas);
       p.meta.mu = o.mu;

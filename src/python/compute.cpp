@@ -51,21 +51,23 @@ py::dict progress_dict(const CompactionProgress& g) {
   return d;
 }
 
-std::string pack_command(const PackArgs& a) {
+// The call recorded in meta.json as the command that made the packing.
+std::string call_record(bool from_gas, const PackArgs& a) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "python: unjam.pack(n=%d, mu=%.17g, seed=%llu, p_ext=%.17g, threads=%d)",
-                a.gas.N, a.mu, static_cast<unsigned long long>(a.gas.seed), a.P_ext, a.threads);
+  if (from_gas)
+    std::snprintf(buf, sizeof buf, "python: unjam.pack(n=%d, mu=%.17g, seed=%llu, p_ext=%.17g, threads=%d)",
+                  a.gas.N, a.mu, static_cast<unsigned long long>(a.gas.seed), a.P_ext, a.threads);
+  else
+    std::snprintf(buf, sizeof buf, "python: unjam.relax(packing, mu=%.17g, p_ext=%.17g, threads=%d)",
+                  a.mu, a.P_ext, a.threads);
   return buf;
 }
 
-// `unjam pack --n ... --out OUT` from a gas: the packing, static. With `out`, checkpoints
-// and the result (also a stopped run, to resume with `unjam pack --resume OUT`) go there.
-// An exception of the progress callback stops the compaction and is raised.
-Packing pack(PackArgs a) {
-  Packing p = make_gas(a.gas);
-  p.meta.mu = a.mu;
-  p.meta.P_ext = a.P_ext;
-  prepare_compaction(p, a.compaction, a.gas, pack_command(a));
+// compact() of a prepared packing, GIL released, with Ctrl-C, the progress callback and, with
+// `out`, checkpoints and the result there (also a stopped run, to resume with
+// `unjam pack --resume OUT`). An exception of the progress callback stops the compaction and
+// is raised.
+Packing run_compaction(Packing p, const PackArgs& a) {
   SignalPoll poll;
   CompactionResult r;
   std::optional<py::error_already_set> callback_error;
@@ -94,6 +96,31 @@ Packing pack(PackArgs a) {
   poll.rethrow_if_interrupted();
   if (!r.is_static) throw Error("no static packing within max_steps");
   return p;
+}
+
+// `unjam pack --n ... --out OUT`: a gas compacted into a static packing.
+Packing pack(PackArgs a) {
+  Packing p = make_gas(a.gas);
+  p.meta.mu = a.mu;
+  p.meta.P_ext = a.P_ext;
+  prepare_compaction(p, a.compaction, a.gas, call_record(true, a));
+  return run_compaction(std::move(p), a);
+}
+
+// `unjam pack --from DIR --mu MU --p-ext P --out OUT`: the packing re-relaxed at mu and p_ext
+// with the settings it was made with.
+Packing relax(const Packing& from, double mu, double p_ext, int threads,
+              std::optional<std::filesystem::path> out, std::optional<py::function> progress) {
+  Packing p = from;
+  PackArgs a;
+  prepare_relaxation(p, mu, p_ext, a.compaction, a.gas);
+  a.mu = mu;
+  a.P_ext = p_ext;
+  a.threads = threads;
+  a.out = std::move(out);
+  a.progress = std::move(progress);
+  prepare_compaction(p, a.compaction, a.gas, call_record(false, a));
+  return run_compaction(std::move(p), a);
 }
 
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g, double dt,
@@ -254,6 +281,11 @@ void bind_compute(py::module_& m) {
         "compact a gas of n disks into a static packing, as `unjam pack` (same seed, same bytes); "
         "progress: a callable given a dict (step, time, phi, P_in_over_P_ext, v_mean, contacts, "
         "elapsed_s, eta_s, ...) every 2 s");
+  m.def("relax", &relax, py::arg("packing"), py::kw_only(), py::arg("mu"), py::arg("p_ext") = pd.P_ext,
+        py::arg("threads") = pd.threads, py::arg("out") = py::none(), py::arg("progress") = py::none(),
+        "re-relax a packing at friction mu and pressure p_ext with the settings it was made "
+        "with, as `unjam pack --from DIR --mu MU --p-ext P` (same bytes); the packing given "
+        "is not changed");
   m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
         py::arg("g") = cd.nlgs.g, py::arg("dt") = cd.nlgs.dt, py::arg("velocity_tol") = cd.nlgs.velocity_tol,

@@ -70,4 +70,11 @@ void prepare_compaction(Packing& p, CompactionSettings& settings, const GasSetti
   p.meta.command = command;
 }
 
+void prepare_relaxation(Packing& p, double mu, double P_ext, CompactionSettings& settings,
+                        GasSettings& gas) {
+  from_json(p.meta.settings, settings, gas);
+  p.meta.mu = mu;
+  p.meta.P_ext = P_ext;
+}
+
 }  // namespace unjam

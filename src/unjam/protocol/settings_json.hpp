@@ -22,4 +22,10 @@ void from_json(const nlohmann::json& j, CompactionSettings& settings, GasSetting
 void prepare_compaction(Packing& packing, CompactionSettings& settings, const GasSettings& gas,
                         const std::string& command);
 
+// A packing to re-relax at friction mu and pressure P_ext (`unjam pack --from`): `settings`
+// and `gas` become those it was made with (its meta.settings), meta.mu and meta.P_ext the new
+// values. Then prepare_compaction and compact() as for a gas.
+void prepare_relaxation(Packing& packing, double mu, double P_ext, CompactionSettings& settings,
+                        GasSettings& gas);
+
 }  // namespace unjam
