@@ -206,14 +206,9 @@ def test_ctrl_c_stops_a_long_pack(tmp_path):
     assert meta["state"]["static"] is False and meta["state"]["step"] > 0
 
 
-def test_ctrl_c_stops_bounds():
-    """SIGINT during the LPs of bounds (ForceBoundsOptions::should_stop): KeyboardInterrupt
-    within seconds, long before the ~600 LPs of a 150-disk packing are done."""
-    code = ("import unjam\n"
-            "p = unjam.pack(n=150, seed=3, threads=1)\n"
-            "print('ready', flush=True)\n"
-            "unjam.bounds(p, threads=2)\n"
-            "print('done', flush=True)\n")
+def interrupted(code):
+    """Runs `code` in a fresh interpreter and sends SIGINT 0.3 s after it prints 'ready';
+    returns (seconds from SIGINT to exit, return code, stdout, stderr)."""
     proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=os.environ.copy())
     assert proc.stdout.readline() == "ready\n", proc.stderr.read()
@@ -221,9 +216,32 @@ def test_ctrl_c_stops_bounds():
     sent = time.monotonic()
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=60)
-    assert time.monotonic() - sent < 5.0
-    assert proc.returncode != 0 and "KeyboardInterrupt" in err and "line 4" in err  # in bounds
-    assert "done" not in out
+    return time.monotonic() - sent, proc.returncode, out, err
+
+
+def test_ctrl_c_stops_bounds():
+    """SIGINT during the LPs of bounds (ForceBoundsOptions::should_stop): KeyboardInterrupt
+    within seconds, long before the ~600 LPs of a 150-disk packing are done."""
+    seconds, rc, out, err = interrupted(
+        "import unjam\n"
+        "p = unjam.pack(n=150, seed=3, threads=1)\n"
+        "print('ready', flush=True)\n"
+        "unjam.bounds(p, threads=2)\n"
+        "print('done', flush=True)\n")
+    assert seconds < 5.0 and rc != 0 and "done" not in out
+    assert "KeyboardInterrupt" in err and "line 4" in err  # in bounds
+
+
+def test_ctrl_c_stops_a_list_of_probes():
+    """SIGINT between the batches of probe(contacts=[...]): 1640 probes (~10 s) stop at once."""
+    seconds, rc, out, err = interrupted(
+        "import unjam\n"
+        f"p = unjam.read_packing({FIXTURE!r})\n"
+        "print('ready', flush=True)\n"
+        "unjam.probe(p, contacts=list(range(82)) * 20, threads=2)\n"
+        "print('done', flush=True)\n")
+    assert seconds < 5.0 and rc != 0 and "done" not in out
+    assert "KeyboardInterrupt" in err and "line 4" in err  # in probe
 
 
 def test_pack_progress_callback_and_its_exception():
