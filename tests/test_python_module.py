@@ -219,29 +219,17 @@ def interrupted(code):
     return time.monotonic() - sent, proc.returncode, out, err
 
 
-def test_ctrl_c_stops_bounds():
-    """SIGINT during the LPs of bounds (ForceBoundsOptions::should_stop): KeyboardInterrupt
-    within seconds, long before the ~600 LPs of a 150-disk packing are done."""
+@pytest.mark.parametrize("setup,call", [
+    # bounds (ForceBoundsOptions::should_stop): ~600 LPs of a 150-disk packing, stopped between LPs
+    ("p = unjam.pack(n=150, seed=3, threads=1)", "unjam.bounds(p, threads=2)"),
+    # probe(contacts=[...]): 1640 probes (~5 s of CPU), stopped between batches
+    (f"p = unjam.read_packing({FIXTURE!r})", "unjam.probe(p, contacts=list(range(82)) * 20, threads=2)"),
+])
+def test_ctrl_c_stops_a_long_call(setup, call):
     seconds, rc, out, err = interrupted(
-        "import unjam\n"
-        "p = unjam.pack(n=150, seed=3, threads=1)\n"
-        "print('ready', flush=True)\n"
-        "unjam.bounds(p, threads=2)\n"
-        "print('done', flush=True)\n")
+        f"import unjam\n{setup}\nprint('ready', flush=True)\n{call}\nprint('done', flush=True)\n")
     assert seconds < 5.0 and rc != 0 and "done" not in out
-    assert "KeyboardInterrupt" in err and "line 4" in err  # in bounds
-
-
-def test_ctrl_c_stops_a_list_of_probes():
-    """SIGINT between the batches of probe(contacts=[...]): 1640 probes (~10 s) stop at once."""
-    seconds, rc, out, err = interrupted(
-        "import unjam\n"
-        f"p = unjam.read_packing({FIXTURE!r})\n"
-        "print('ready', flush=True)\n"
-        "unjam.probe(p, contacts=list(range(82)) * 20, threads=2)\n"
-        "print('done', flush=True)\n")
-    assert seconds < 5.0 and rc != 0 and "done" not in out
-    assert "KeyboardInterrupt" in err and "line 4" in err  # in probe
+    assert "KeyboardInterrupt" in err and "line 4" in err  # in the call
 
 
 def test_pack_progress_callback_and_its_exception():
