@@ -1,7 +1,7 @@
 """`unjam export` read back by independent readers: VTK's own XML reader (Debian python3-vtk9)
 for .vtp, and a parser of extended XYZ written here from the format's definition (ASE/OVITO:
 line 1 the count, line 2 key=value pairs with Lattice and Properties=name:type:columns:...).
-Run by ctest (export_readback) with UNJAM and PYTHONPATH set, like test_python_module.py.
+Run by ctest (export) with UNJAM and PYTHONPATH set, like test_python_module.py.
 """
 import csv
 import os
