@@ -7,6 +7,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   python3-siconos
+  python3-dev pybind11-dev python3-pybind11 python3-pytest python3-vtk9 xvfb xauth
 )
 missing=()
 for p in "${packages[@]}"; do

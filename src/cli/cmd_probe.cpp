@@ -45,14 +45,9 @@ struct ProbeOptions {
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
 CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
-  CompactionSettings cs;
-  GasSettings gas;
-  from_json(p.meta.settings, cs, gas);
-  CampaignSettings s;
+  CampaignSettings s = campaign_settings_for(p);
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
-  if (!(o.g > 0.0) || !(o.dt > 0.0) || !(o.velocity_tol > 0.0))
-    throw Error("--g, --dt and --velocity-tol must be positive");
   s.method = method_from_name(o.method);
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
@@ -61,8 +56,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.nlgs.dt = o.dt;
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
-  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
-  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  validate(s);
   return s;
 }
 

@@ -10,5 +10,6 @@ void add_info_command(CLI::App& app);
 void add_probe_command(CLI::App& app);
 void add_bounds_command(CLI::App& app);
 void add_ensemble_command(CLI::App& app);
+void add_export_command(CLI::App& app);
 
 }  // namespace unjam::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   unjam::cli::add_probe_command(app);
   unjam::cli::add_bounds_command(app);
   unjam::cli::add_ensemble_command(app);
+  unjam::cli::add_export_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -14,13 +14,9 @@
 namespace unjam {
 
 std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol) {
-  std::vector<ContactState> states(network.fn.size(), ContactState::closed);
-  for (Eigen::Index k = 0; k < network.fn.size(); ++k) {
-    if (network.fn[k] <= tol)
-      states[k] = ContactState::open;
-    else if (mu > 0.0 && mu * network.fn[k] - std::abs(network.ft[k]) <= tol)
-      states[k] = ContactState::sliding;
-  }
+  std::vector<ContactState> states(network.fn.size());
+  for (Eigen::Index k = 0; k < network.fn.size(); ++k)
+    states[k] = contact_state(network.fn[k], network.ft[k], mu, tol);
   return states;
 }
 
@@ -173,7 +169,7 @@ struct LpCounts {
 // Runs solve(lp, k) for every k of `todo` on `threads` threads, one ForceLP copy each, in
 // contiguous chunks (neighbouring contacts share grains: for the simplex the previous optimum
 // is a good start). An exception may not leave an OpenMP loop, so each thread records the
-// first error and skips the rest; it is rethrown here.
+// first error (or a stop request) and skips the rest; it is rethrown here.
 template <class Solve>
 LpCounts for_each_lp(const ForceLP& base, const std::vector<int>& todo, int threads,
                      std::atomic<int>& done, const ForceBoundsOptions& options, int total,
@@ -203,7 +199,16 @@ LpCounts for_each_lp(const ForceLP& base, const std::vector<int>& todo, int thre
         }
       }
       const int n_done = ++done;
-      if (options.progress && omp_get_thread_num() == 0) options.progress(n_done, total);
+      if (omp_get_thread_num() != 0) continue;
+      if (options.progress) options.progress(n_done, total);
+      if (options.should_stop && options.should_stop()) {
+#pragma omp critical(unjam_force_bounds_error)
+        if (!any_error) {
+          error = "interrupted";
+#pragma omp atomic write
+          any_error = true;
+        }
+      }
     }
     iterations += lp.iterations();
     loosened += lp.loosened_solves();

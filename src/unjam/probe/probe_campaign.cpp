@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "unjam/core/error.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
+#include "unjam/protocol/settings_json.hpp"
 
 namespace unjam {
 namespace {
@@ -54,6 +56,30 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
   average.add_probe(r.contact, field, r.g);
 }
 
+// Probes contacts[0, n) in parallel, one probe per thread at a time on the thread's worker
+// (workers.size() == omp_get_max_threads()); the results in the order of `contacts`. An
+// exception may not leave an OpenMP loop: errors are collected and the first one rethrown.
+std::vector<ProbeResult> probe_batch(const Packing& p, const CampaignSettings& s,
+                                     std::vector<Worker>& workers, const int* contacts, int n) {
+  std::vector<std::optional<ProbeResult>> results(n);
+  std::vector<std::string> errors(n);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int j = 0; j < n; ++j) {
+    try {
+      results[j] = workers[omp_get_thread_num()].probe(p, s, contacts[j]);
+    } catch (const std::exception& e) {
+      errors[j] = e.what();
+    }
+  }
+  std::vector<ProbeResult> out;
+  out.reserve(n);
+  for (int j = 0; j < n; ++j) {
+    if (!results[j]) throw Error("probe of contact " + std::to_string(contacts[j]) + ": " + errors[j]);
+    out.push_back(std::move(*results[j]));
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* method_name(ProbeMethod method) {
@@ -70,6 +96,23 @@ ProbeMethod method_from_name(const std::string& name) {
   for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke, ProbeMethod::kCd})
     if (name == method_name(m)) return m;
   throw Error("--method must be lp, nlgs, lemke or cd (got '" + name + "')");
+}
+
+CampaignSettings campaign_settings_for(const Packing& p) {
+  CompactionSettings cs;
+  GasSettings gas;
+  from_json(p.meta.settings, cs, gas);
+  CampaignSettings s;
+  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
+  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  return s;
+}
+
+void validate(const CampaignSettings& s) {
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
+      !positive(s.nlgs.velocity_tol))
+    throw Error("the probe's g, dt and velocity_tol must be positive");
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
@@ -91,6 +134,26 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
   return w.probe(p, s, contact);
 }
 
+std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings& s,
+                                        const std::vector<int>& contacts,
+                                        const std::function<bool()>& should_stop) {
+  const int M = static_cast<int>(p.contacts.size());
+  for (const int k : contacts)
+    if (k < 0 || k >= M)
+      throw Error("contact " + std::to_string(k) + ": the packing has " + std::to_string(M) + " contacts");
+  const int threads = omp_get_max_threads();
+  std::vector<Worker> workers(threads);
+  std::vector<ProbeResult> results;
+  results.reserve(contacts.size());
+  const std::size_t batch = 2 * static_cast<std::size_t>(threads);
+  for (std::size_t start = 0; start < contacts.size(); start += batch) {
+    if (should_stop && should_stop()) break;
+    const int n = static_cast<int>(std::min(batch, contacts.size() - start));
+    for (ProbeResult& r : probe_batch(p, s, workers, contacts.data() + start, n)) results.push_back(std::move(r));
+  }
+  return results;
+}
+
 bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
                   const CampaignHooks& hooks) {
   const std::vector<int> all = campaign_targets(p, s);
@@ -108,20 +171,9 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   for (std::size_t start = 0; start < todo.size(); start += batch) {
     if (hooks.should_stop && hooks.should_stop()) return false;
     const int n = static_cast<int>(std::min<std::size_t>(batch, todo.size() - start));
-    std::vector<std::optional<ProbeResult>> results(n);
-    std::vector<std::string> errors(n);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int j = 0; j < n; ++j) {
-      try {
-        results[j] = workers[omp_get_thread_num()].probe(p, s, todo[start + j]);
-      } catch (const std::exception& e) {
-        errors[j] = e.what();
-      }
-    }
-    for (int j = 0; j < n; ++j) {
-      if (!results[j]) throw Error("probe of contact " + std::to_string(todo[start + j]) + ": " + errors[j]);
-      if (results[j]->residual != kNoSolution) add_to_average(p, s, loaded, *results[j], state.average);
-      state.rows.push_back(row_of(*results[j]));
+    for (const ProbeResult& r : probe_batch(p, s, workers, todo.data() + start, n)) {
+      if (r.residual != kNoSolution) add_to_average(p, s, loaded, r, state.average);
+      state.rows.push_back(row_of(r));
     }
     std::sort(state.rows.begin(), state.rows.end(),
               [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
