@@ -6,18 +6,24 @@
 //                         (one thread): s per probe; F_crit >= F_cont (the LP maximum is at
 //                         least the packing's own force), the field opens the pair by g with
 //                         no unilateral violation. Counter model_s: building the LP model.
+//   BM_CdPath/N           probe_cd_path (the exact CD step, --method cd) on the same contacts,
+//                         one thread: s per probe; counters exact (residual <= 1e-6 g),
+//                         no_solution and pieces per probe; every solution returned must
+//                         open the pair by g (1e-6) and pass kMaxPathResidual.
 //   BM_ForceLp/N          ForceLP min and max of fn on the same contacts (barrier, one
 //                         thread): s per LP; fn_min <= fn <= fn_max.
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <chrono>
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "scenes.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 
 namespace {
@@ -70,6 +76,47 @@ void BM_KinematicProbe(benchmark::State& state) {
 }
 BENCHMARK(BM_KinematicProbe)
     ->ArgName("N")->Arg(500)->Arg(2000)->Arg(8000)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+
+void BM_CdPath(benchmark::State& state) {
+  const int N = static_cast<int>(state.range(0));
+  const Packing& p = bench::static_scene(N, kMu);
+  const std::vector<int> contacts = probed_contacts(p);
+  omp_set_num_threads(1);
+  std::vector<CdStepSolution> results;
+  std::vector<CdPathStats> stats(contacts.size());
+  for (auto _ : state) {
+    results.clear();
+    for (std::size_t i = 0; i < contacts.size(); ++i)
+      results.push_back(probe_cd_path(p, contacts[i], ProbeSettings{}, CdPathSettings{}, &stats[i]));
+  }
+  int exact = 0, none = 0, pieces = 0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const ProbeResult& r = results[i].result;
+    pieces += stats[i].pieces;
+    if (r.residual == kNoSolution) {
+      ++none;
+      continue;
+    }
+    if (r.converged) ++exact;
+    const double open = contact_opening(p, r, contacts[i]) / r.g;
+    if (!(r.residual <= kMaxPathResidual) || !(std::abs(open - 1.0) < 1e-6)) {
+      state.SkipWithError(("probe of contact " + std::to_string(contacts[i]) + " fails its check").c_str());
+      return;
+    }
+  }
+  state.counters["probes"] = kProbes;
+  state.counters["exact"] = exact;
+  state.counters["no_solution"] = none;
+  state.counters["pieces"] = static_cast<double>(pieces) / kProbes;
+  state.counters["s_per_probe"] =
+      benchmark::Counter(kProbes, benchmark::Counter::kIsIterationInvariantRate |
+                                      benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_CdPath)
+    ->ArgName("N")->Arg(500)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);

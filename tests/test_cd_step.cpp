@@ -15,6 +15,7 @@
 #include "unjam/core/error.hpp"
 #include "unjam/core/lemke.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
 
@@ -111,6 +112,53 @@ TEST(CdStep, LemkeMatchesTheIndependentComplementaritySolver) {
     // The field opens the probed pair by g.
     EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-9) << "contact " << k;
   }
+}
+
+TEST(CdPath, FollowsTheStepFromTheStaticNetworkToTheReference) {
+  // p50-mu1 (g = 1e-9, dt = 1e-3). Contacts 1 and 2: the step's unique solution. Contacts 5
+  // and 6: the path reaches the reference's solution from the static state (2.2677, 2.2687),
+  // not the other exact solution (2.2454, 2.2438). Every one exactly: residual below
+  // kExactStepTolerance, as checked by the shared residual of the step.
+  const Packing& p = fixture("p50-mu1");
+  for (const auto& [k, f_ref] : cd_reference()) {
+    CdPathStats stats;
+    const CdStepSolution s = probe_cd_path(p, k, ProbeSettings{}, CdPathSettings{}, &stats);
+    ASSERT_EQ(s.f.size(), 2 * static_cast<Eigen::Index>(p.contacts.size())) << "contact " << k;
+    EXPECT_TRUE(stats.failure.empty());
+    EXPECT_GT(stats.pieces, 0);
+    EXPECT_NEAR(s.result.f_crit / f_ref, 1.0, 1e-6) << "contact " << k;
+    EXPECT_TRUE(s.result.converged) << "contact " << k;
+    EXPECT_LT(s.residual.max(), kExactStepTolerance) << "contact " << k;
+    EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-6) << "contact " << k;
+    EXPECT_GT(stats.open + stats.sliding, 0);
+  }
+}
+
+TEST(CdPath, AgreesWithLemkeWhereTheStepHasOneSolution) {
+  // p50-mu0.1 contacts 0..5: Lemke's method (dense, an independent pivoting order) and the
+  // path find the same F_crit, and both solutions pass the step's residual check.
+  const Packing& p = fixture("p50-mu0.1");
+  for (int k = 0; k < 6; ++k) {
+    const CdStepSolution path = probe_cd_path(p, k, ProbeSettings{});
+    const CdStepSolution lemke = probe_cd_lemke(p, k, ProbeSettings{});
+    ASSERT_TRUE(path.result.converged) << "contact " << k;
+    ASSERT_TRUE(lemke.result.converged) << "contact " << k;
+    EXPECT_NEAR(path.result.f_crit / lemke.result.f_crit, 1.0, 1e-6) << "contact " << k;
+  }
+}
+
+TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {
+  // A path that needs more pieces than allowed says so (no F_crit, residual kNoSolution)
+  // instead of returning the forces where it stopped.
+  const Packing& p = fixture("p50-mu0.1");
+  CdPathSettings cut;
+  cut.max_pieces = 1;
+  CdPathStats stats;
+  const CdStepSolution s = probe_cd_path(p, 0, ProbeSettings{}, cut, &stats);
+  EXPECT_EQ(stats.failure, "pieces");
+  EXPECT_FALSE(s.result.converged);
+  EXPECT_EQ(s.result.residual, kNoSolution);
+  EXPECT_EQ(s.f.size(), 0);
 }
 
 TEST(CdStep, APerturbedSolutionFailsTheResidualCheck) {

@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
@@ -102,6 +104,33 @@ TEST(Probe, ExactStepReachesTheQuasiStaticLimitAtLargeDt) {
   EXPECT_NEAR(a.result.f_crit / nlgs.f_crit, 1.0, 1e-4);
 }
 
+TEST(Probe, ExactStepFromTheStaticNetworkEqualsLemkeWithoutFriction) {
+  // mu = 0, isostatic: the step has one solution, so the path from the static network
+  // (probe/cd_path) and Lemke's method from zero forces must agree on F_crit and on the
+  // field, at dt = 1e-3 and in the quasi-static limit dt = 0.1 (F_crit = F_cont).
+  const Packing& p = isostatic_packing();
+  int probed = 0;
+  for (int k = 0; k < static_cast<int>(p.contacts.size()) && probed < 3; ++k) {
+    if (p.contacts[k].fn < 0.5 * p.force_unit()) continue;
+    ++probed;
+    for (const double dt : {1e-3, 0.1}) {
+      ProbeSettings set;
+      set.dt = dt;
+      const CdStepSolution path = probe_cd_path(p, k, set), lemke = probe_cd_lemke(p, k, set);
+      ASSERT_TRUE(path.result.converged) << "contact " << k << " dt " << dt;
+      ASSERT_TRUE(lemke.result.converged) << "contact " << k << " dt " << dt;
+      EXPECT_NEAR(path.result.f_crit / lemke.result.f_crit, 1.0, 1e-6) << "contact " << k << " dt " << dt;
+      double du = 0.0, u = 0.0;
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        du = std::max(du, (path.result.u[i] - lemke.result.u[i]).norm());
+        u = std::max(u, lemke.result.u[i].norm());
+      }
+      EXPECT_LT(du, 1e-5 * u) << "contact " << k << " dt " << dt;
+    }
+  }
+  EXPECT_EQ(probed, 3);
+}
+
 TEST(Probe, CriticalForceReachesButNeverExceedsTheLpMaximum) {
   // mu = 0.1, the 50-disk fixture: F_crit <= max fn over the admissible set (up to the
   // inertial term), and the paper finds it equal; measured 0.989-0.995 on these contacts.
@@ -167,6 +196,31 @@ TEST(ProbeCampaign, SameResultsWithOneAndTwoThreads) {
   for (std::size_t i = 0; i < one.rows.size(); ++i) {
     EXPECT_EQ(one.rows[i].contact, two.rows[i].contact);
     EXPECT_EQ(one.rows[i].f_crit, two.rows[i].f_crit);
+  }
+  EXPECT_TRUE(one.average == two.average);
+}
+
+TEST(ProbeCampaign, ExactCdProbeGivesTheSameBytesWithOneAndTwoThreads) {
+  // --method cd on every contact of the 50-disk fixture: each probe exact, and the rows and
+  // the averages identical whatever the thread count.
+  const Packing& p = fixture_p50();
+  CampaignSettings s;
+  s.method = ProbeMethod::kCd;
+  const auto run = [&](int threads) {
+    omp_set_num_threads(threads);
+    CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+    EXPECT_TRUE(run_campaign(p, s, st));
+    return st;
+  };
+  const CampaignState one = run(1), two = run(2);
+  omp_set_num_threads(omp_get_num_procs());
+  ASSERT_EQ(one.rows.size(), 81u);
+  ASSERT_EQ(one.rows.size(), two.rows.size());
+  for (std::size_t i = 0; i < one.rows.size(); ++i) {
+    EXPECT_TRUE(one.rows[i].converged) << "contact " << one.rows[i].contact;
+    EXPECT_LE(one.rows[i].residual, kExactStepTolerance) << "contact " << one.rows[i].contact;
+    EXPECT_EQ(one.rows[i].f_crit, two.rows[i].f_crit);
+    EXPECT_EQ(one.rows[i].residual, two.rows[i].residual);
   }
   EXPECT_TRUE(one.average == two.average);
 }

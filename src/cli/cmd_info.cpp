@@ -4,8 +4,6 @@
 #include <memory>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "cli/commands.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/core/error.hpp"
@@ -20,40 +18,6 @@ struct InfoOptions {
   bool json = false;
   double threshold = 1e-9;  // force-carrying: fn > threshold * F0
 };
-
-nlohmann::ordered_json stats_json(const std::string& dir, const Packing& p, const PackingStats& s, double threshold) {
-  nlohmann::ordered_json j = {
-      {"packing", dir},
-      {"program_version", p.meta.program_version},
-      {"seed", p.meta.seed},
-      {"N", s.N},
-      {"Lx", p.cell.Lx},
-      {"Ly", p.cell.Ly},
-      {"P_ext", p.meta.P_ext},
-      {"mu", s.mu},
-      {"F0", s.F0},
-      {"phi", s.phi},
-      {"z", s.z},
-      {"rattlers", s.rattlers},
-      {"N_prime", s.N_prime},
-      {"force_threshold_F0", threshold},
-      {"contacts_force_carrying", s.N_c},
-      {"contacts_listed", s.contacts},
-      {"F_cont_over_F0", s.F_cont},
-      {"F_mean_listed_over_F0", s.F_mean_listed},
-      {"max_overlap", s.max_overlap},
-      {"mean_overlap", s.mean_overlap},
-      {"max_force_residual_over_F0", s.max_force_residual},
-      {"mean_force_residual_over_F0", s.mean_force_residual},
-      {"max_torque_residual_over_F0R", s.max_torque_residual},
-      {"P_in", s.P_in},
-      {"P_in_over_P_ext", s.pressure_ratio},
-      {"max_coulomb_violation_over_F0", s.max_coulomb_violation},
-      {"max_tension_over_F0", s.max_tension},
-  };
-  if (s.isostatic_excess) j["isostatic_excess"] = *s.isostatic_excess;
-  return j;
-}
 
 void print_text(const std::string& dir, const Packing& p, const PackingStats& s, double threshold) {
   auto row = [](const char* label, const std::string& value) { std::printf("%-34s %s\n", label, value.c_str()); };
@@ -101,7 +65,7 @@ void add_info_command(CLI::App& app) {
     const Packing p = read_packing(opt->dir);
     const PackingStats s = compute_packing_stats(p, opt->threshold);
     if (opt->json)
-      std::printf("%s\n", stats_json(opt->dir, p, s, opt->threshold).dump(2).c_str());
+      std::printf("%s\n", stats_json(p, s, opt->threshold, opt->dir).dump(2).c_str());
     else
       print_text(opt->dir, p, s, opt->threshold);
   });

@@ -59,20 +59,15 @@ void run(PackOptions& o) {
     if (o.out.empty()) throw Error("--out is required (or --resume DIR)");
     if (!o.from.empty()) {
       p = read_packing(o.from);
-      from_json(p.meta.settings, o.compaction, o.gas);
-      p.meta.mu = o.mu;
-      p.meta.P_ext = o.P_ext;
+      prepare_relaxation(p, o.mu, o.P_ext, o.compaction, o.gas);
     } else {
       p = make_gas(o.gas);
       p.meta.mu = o.mu;
       p.meta.P_ext = o.P_ext;
     }
   }
-  o.compaction.dynamics.bath.P_ext = p.meta.P_ext;
-  validate(o.compaction, p.meta.mu);
+  prepare_compaction(p, o.compaction, o.gas, o.command);
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  p.meta.settings = to_json(o.compaction, o.gas);
-  p.meta.command = o.command;
 
   CompactionHooks hooks;
   if (!o.quiet) {

@@ -19,6 +19,7 @@
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 #include "unjam/protocol/compaction.hpp"
@@ -48,14 +49,9 @@ struct ProbeOptions {
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
 CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
-  CompactionSettings cs;
-  GasSettings gas;
-  from_json(p.meta.settings, cs, gas);
-  CampaignSettings s;
+  CampaignSettings s = campaign_settings_for(p);
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
-  if (!(o.g > 0.0) || !(o.dt > 0.0) || !(o.velocity_tol > 0.0))
-    throw Error("--g, --dt and --velocity-tol must be positive");
   s.method = method_from_name(o.method);
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
@@ -64,8 +60,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.nlgs.dt = o.dt;
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
-  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
-  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  validate(s);
   return s;
 }
 
@@ -94,9 +89,10 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
 
 // The exact step also writes its contact forces (probe-K-forces.csv), so that the solution
 // can be checked by anyone.
-ProbeResult probe_lemke_with_forces(const Packing& p, const CampaignSettings& s, int contact,
+ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s, int contact,
                                     const fs::path& out) {
-  const CdStepSolution sol = probe_cd_lemke(p, contact, s.nlgs);
+  const CdStepSolution sol = s.method == ProbeMethod::kLemke ? probe_cd_lemke(p, contact, s.nlgs)
+                                                             : probe_cd_path(p, contact, s.nlgs);
   if (sol.f.size() > 0)
     write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
                       step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
@@ -110,8 +106,8 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
                 o.contact, o.export_problem.c_str());
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const ProbeResult r = s.method == ProbeMethod::kLemke ? probe_lemke_with_forces(p, s, o.contact, out)
-                                                        : probe_contact(p, s, o.contact);
+  const bool exact = s.method == ProbeMethod::kLemke || s.method == ProbeMethod::kCd;
+  const ProbeResult r = exact ? probe_exact_with_forces(p, s, o.contact, out) : probe_contact(p, s, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
@@ -357,13 +353,14 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--method", o->method,
                   "lp: F_crit as the LP maximum and the kinematic field at its optimum (fast); "
                   "nlgs: the paper's contact-dynamics probe (reference, slow); "
-                  "lemke: the same step solved exactly by Lemke's method (dense, up to ~1200 contacts)")
+                  "lemke: the same step solved exactly by Lemke's method (dense, up to ~1200 contacts); "
+                  "cd: the same step solved exactly along its path from the static network (sparse; each probe's residual says whether it is exact, docs/probe.md)")
       ->capture_default_str();
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
   cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str();
-  cmd->add_option("--dt", o->dt, "nlgs, lemke: time step of the probe")->capture_default_str();
+  cmd->add_option("--dt", o->dt, "nlgs, lemke, cd: time step of the probe")->capture_default_str();
   cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")->capture_default_str();
   cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str();
   cmd->add_option("--displacement", o->displacement,

@@ -11,5 +11,6 @@ void add_probe_command(CLI::App& app);
 void add_bounds_command(CLI::App& app);
 void add_ensemble_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
+void add_export_command(CLI::App& app);
 
 }  // namespace unjam::cli

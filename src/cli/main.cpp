@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   unjam::cli::add_bounds_command(app);
   unjam::cli::add_ensemble_command(app);
   unjam::cli::add_merge_command(app);
+  unjam::cli::add_export_command(app);
   int code = 0;
   try {
     app.parse(argc, argv);

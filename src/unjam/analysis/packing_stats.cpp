@@ -148,4 +148,39 @@ std::vector<std::pair<int, int>> missing_contacts(const Packing& packing, double
   return missing;
 }
 
+nlohmann::ordered_json stats_json(const Packing& p, const PackingStats& s, double threshold,
+                                  const std::string& source) {
+  nlohmann::ordered_json j = {
+      {"packing", source},
+      {"program_version", p.meta.program_version},
+      {"seed", p.meta.seed},
+      {"N", s.N},
+      {"Lx", p.cell.Lx},
+      {"Ly", p.cell.Ly},
+      {"P_ext", p.meta.P_ext},
+      {"mu", s.mu},
+      {"F0", s.F0},
+      {"phi", s.phi},
+      {"z", s.z},
+      {"rattlers", s.rattlers},
+      {"N_prime", s.N_prime},
+      {"force_threshold_F0", threshold},
+      {"contacts_force_carrying", s.N_c},
+      {"contacts_listed", s.contacts},
+      {"F_cont_over_F0", s.F_cont},
+      {"F_mean_listed_over_F0", s.F_mean_listed},
+      {"max_overlap", s.max_overlap},
+      {"mean_overlap", s.mean_overlap},
+      {"max_force_residual_over_F0", s.max_force_residual},
+      {"mean_force_residual_over_F0", s.mean_force_residual},
+      {"max_torque_residual_over_F0R", s.max_torque_residual},
+      {"P_in", s.P_in},
+      {"P_in_over_P_ext", s.pressure_ratio},
+      {"max_coulomb_violation_over_F0", s.max_coulomb_violation},
+      {"max_tension_over_F0", s.max_tension},
+  };
+  if (s.isostatic_excess) j["isostatic_excess"] = *s.isostatic_excess;
+  return j;
+}
+
 }  // namespace unjam

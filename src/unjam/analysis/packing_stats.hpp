@@ -7,8 +7,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "unjam/core/vec2.hpp"
 #include "unjam/packing/packing.hpp"
@@ -59,6 +62,12 @@ struct PackingStats {
 };
 
 PackingStats compute_packing_stats(const Packing& packing, double force_threshold_F0 = 1e-9);
+
+// The statistics as `unjam info --json` prints them (and the Python module's stats()): one
+// object with the packing's record (source directory, program version, seed, N, cell, P_ext)
+// and every field of PackingStats, forces in units of F0.
+nlohmann::ordered_json stats_json(const Packing& packing, const PackingStats& stats,
+                                  double force_threshold_F0, const std::string& source);
 
 // Pairs (i, j), i < j, sorted, whose gap |r_j - r_i| - R_i - R_j (minimum image) is below
 // -gap_tol but which are not in packing.contacts. Uses a cell list: O(N).

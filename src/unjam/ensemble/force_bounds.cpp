@@ -15,13 +15,9 @@
 namespace unjam {
 
 std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol) {
-  std::vector<ContactState> states(network.fn.size(), ContactState::closed);
-  for (Eigen::Index k = 0; k < network.fn.size(); ++k) {
-    if (network.fn[k] <= tol)
-      states[k] = ContactState::open;
-    else if (mu > 0.0 && mu * network.fn[k] - std::abs(network.ft[k]) <= tol)
-      states[k] = ContactState::sliding;
-  }
+  std::vector<ContactState> states(network.fn.size());
+  for (Eigen::Index k = 0; k < network.fn.size(); ++k)
+    states[k] = contact_state(network.fn[k], network.ft[k], mu, tol);
   return states;
 }
 

@@ -26,12 +26,7 @@ struct ForceNetwork {
   Eigen::VectorXd fn, ft;
 };
 
-// State of a contact in a network: open (fn = 0), sliding (mu > 0 and |ft| = mu fn > 0)
-// or closed (fn > 0 and |ft| < mu fn, or mu = 0).
-enum class ContactState { closed, sliding, open };
-
-// Classifies every contact; `tol` is an absolute force tolerance: open if fn <= tol,
-// sliding if mu fn - |ft| <= tol.
+// Classifies every contact of a network by contact_state (packing/contact.hpp).
 std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol);
 
 // How each LP is solved (timings in docs/ensemble.md):

@@ -7,6 +7,7 @@
 //   gap = |l| - R_a - R_b (negative: overlap),
 //   the force on b is fn n + ft t, the force on a is -(fn n + ft t); fn >= 0 is compressive,
 //   torques: T_a = -R_a ft, T_b = -R_b ft.
+#include <cmath>
 #include <vector>
 
 #include "unjam/core/vec2.hpp"
@@ -26,5 +27,16 @@ struct Contact {
 };
 
 using Contacts = std::vector<Contact>;
+
+// State of a contact with forces (fn, ft): open (fn = 0), sliding (mu > 0 and |ft| = mu fn > 0)
+// or closed (fn > 0 and |ft| < mu fn, or mu = 0). `tol` is an absolute force tolerance: open
+// if fn <= tol, sliding if mu fn - |ft| <= tol.
+enum class ContactState { closed, sliding, open };
+
+inline ContactState contact_state(double fn, double ft, double mu, double tol) {
+  if (fn <= tol) return ContactState::open;
+  if (mu > 0.0 && mu * fn - std::abs(ft) <= tol) return ContactState::sliding;
+  return ContactState::closed;
+}
 
 }  // namespace unjam

@@ -147,21 +147,29 @@ void CsvWriter::separator() {
   if (in_row_++ > 0) text_ += ',';
 }
 
-CsvWriter& CsvWriter::cell(double value) {
-  separator();
+void append_number(std::string& out, double value) {
   char buf[32];
   const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, value);  // shortest round trip
-  if (ec != std::errc()) throw std::logic_error("CsvWriter: to_chars failed");
-  text_.append(buf, ptr);
+  if (ec != std::errc()) throw std::logic_error("append_number: to_chars failed");
+  out.append(buf, ptr);
+}
+
+void append_number(std::string& out, std::int64_t value) {
+  char buf[24];
+  const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, value);
+  if (ec != std::errc()) throw std::logic_error("append_number: to_chars failed");
+  out.append(buf, ptr);
+}
+
+CsvWriter& CsvWriter::cell(double value) {
+  separator();
+  append_number(text_, value);
   return *this;
 }
 
 CsvWriter& CsvWriter::cell(std::int64_t value) {
   separator();
-  char buf[24];
-  const auto [ptr, ec] = std::to_chars(buf, buf + sizeof buf, value);
-  if (ec != std::errc()) throw std::logic_error("CsvWriter: to_chars failed");
-  text_.append(buf, ptr);
+  append_number(text_, value);
   return *this;
 }
 

@@ -62,6 +62,10 @@ class CsvTable {
   std::vector<std::size_t> line_of_row_;
 };
 
+// Appends `value` in the shortest form that reloads bit for bit (std::to_chars).
+void append_number(std::string& out, double value);
+void append_number(std::string& out, std::int64_t value);
+
 // Builds a CSV text row by row: cell(...) for each column, then end_row().
 class CsvWriter {
  public:

@@ -175,38 +175,47 @@ CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSe
   }
 
   CdStepSolution sol;
-  ProbeResult& r = sol.result;
+  if (lcp.z.size() > 0) {
+    sol.f.setZero(2 * nc);
+    const bool friction = pb.system.mu > 0.0;
+    for (int k = 0; k < nc; ++k) {
+      sol.f[2 * k] = lcp.z[k];
+      if (friction) sol.f[2 * k + 1] = lcp.z[nc + k] - lcp.z[2 * nc + k];
+    }
+    sol.residual = cd_step_residual(pb, sol.f);
+  }
+  sol.result = cd_step_result(pb, packing, settings, sol.f);
+  sol.result.sweeps = lcp.pivots;
+  return sol;
+}
+
+ProbeResult cd_step_result(const CdStepProblem& pb, const Packing& packing,
+                           const ProbeSettings& settings, const Eigen::VectorXd& f) {
+  ProbeResult r;
+  const int contact = pb.system.contacts[pb.probed];
   r.contact = contact;
   r.a = packing.contacts[contact].a;
   r.b = packing.contacts[contact].b;
   r.f_cont = packing.contacts[contact].fn;
   r.g = settings.g;
-  r.sweeps = lcp.pivots;
   r.u.assign(packing.size(), Vec2(0.0, 0.0));
   r.u_rot.assign(packing.size(), 0.0);
-  if (lcp.z.size() == 0) {
+  if (f.size() == 0) {
     r.converged = false;
     r.residual = kNoSolution;
-    return sol;
+    return r;
   }
-  sol.f.setZero(2 * nc);
-  const bool friction = pb.system.mu > 0.0;
-  for (int k = 0; k < nc; ++k) {
-    sol.f[2 * k] = lcp.z[k];
-    if (friction) sol.f[2 * k + 1] = lcp.z[nc + k] - lcp.z[2 * nc + k];
-  }
-  sol.residual = cd_step_residual(pb, sol.f);
-  r.residual = sol.residual.max();
+  r.residual = cd_step_residual(pb, f).max();
   r.converged = r.residual <= kExactStepTolerance;
-  r.f_crit = sol.f[2 * contact];
-  const Eigen::VectorXd qd = pb.generalized_displacement(sol.f);
+  r.f_crit = f[2 * pb.probed];
+  const Eigen::VectorXd qd = pb.generalized_displacement(f);
   for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
     const int grain = pb.system.grains[i];
     r.u[grain] = Vec2(qd[3 * i], qd[3 * i + 1]);
     r.u_rot[grain] = qd[3 * i + 2] / packing.particles.radius[grain];
   }
   r.lambda_dt = qd[pb.system.pressure_row()];
-  return sol;
+  return r;
 }
 
 std::string step_forces_csv(const CdStepProblem& pb, const Packing& packing, const Eigen::VectorXd& f) {

@@ -82,6 +82,11 @@ inline constexpr int kMaxLemkeContacts = 1200;
 inline constexpr int kLemkeRetries = 4;
 CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSettings& settings);
 
+// F_crit (the probed contact's fn), the field q and the residual of forces f of the step;
+// f empty: a probe without a solution (residual kNoSolution).
+ProbeResult cd_step_result(const CdStepProblem& problem, const Packing& packing,
+                           const ProbeSettings& settings, const Eigen::VectorXd& f);
+
 // The forces of a probe as a table a, b, fn, ft (every contact of the packing).
 std::string step_forces_csv(const CdStepProblem& problem, const Packing& packing,
                             const Eigen::VectorXd& f);

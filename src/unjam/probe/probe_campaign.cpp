@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -10,7 +11,9 @@
 
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
+#include "unjam/protocol/settings_json.hpp"
 
 namespace unjam {
 namespace {
@@ -26,6 +29,7 @@ struct Worker {
   ProbeResult probe(const Packing& p, const CampaignSettings& s, int contact) {
     if (s.method == ProbeMethod::kNlgs) return probe_nlgs(p, contact, s.nlgs);
     if (s.method == ProbeMethod::kLemke) return probe_cd_lemke(p, contact, s.nlgs).result;
+    if (s.method == ProbeMethod::kCd) return probe_cd_path(p, contact, s.nlgs).result;
     if (!kinematic) kinematic = std::make_unique<KinematicProbe>(p, s.kinematic);
     return kinematic->probe(contact);
   }
@@ -60,6 +64,7 @@ std::string encode(const ProbeResult& r) {
   std::vector<double> u(2 * r.u.size());
   for (std::size_t i = 0; i < r.u.size(); ++i) u[2 * i] = r.u[i].x(), u[2 * i + 1] = r.u[i].y();
   w.put_array(u.data(), u.size());
+  w.put_array(r.u_rot.data(), r.u_rot.size());
   return w.take();
 }
 
@@ -79,7 +84,23 @@ ProbeResult decode(const std::string& bytes) {
   r.violations = in.get<int>();
   const std::vector<double> u = in.get_array<double>();
   for (std::size_t i = 0; i + 1 < u.size(); i += 2) r.u.emplace_back(u[i], u[i + 1]);
+  r.u_rot = in.get_array<double>();
   return r;
+}
+
+// The work of a loop of probes on this process: task t probes contacts[t] (contact t if
+// `contacts` is null), one probe per thread at a time on omp_get_max_threads() threads, each
+// thread with its own worker (the LP probe keeps its model); each result as bytes.
+void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s,
+                 const std::vector<int>* contacts) {
+  work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
+    const int k = contacts ? (*contacts)[t] : t;
+    try {
+      return encode(w.probe(p, s, k));
+    } catch (const std::exception& e) {
+      throw Error("probe of contact " + std::to_string(k) + ": " + e.what());
+    }
+  });
 }
 
 }  // namespace
@@ -89,14 +110,32 @@ const char* method_name(ProbeMethod method) {
     case ProbeMethod::kLp: return "lp";
     case ProbeMethod::kNlgs: return "nlgs";
     case ProbeMethod::kLemke: return "lemke";
+    case ProbeMethod::kCd: return "cd";
   }
   return "?";
 }
 
 ProbeMethod method_from_name(const std::string& name) {
-  for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke})
+  for (ProbeMethod m : {ProbeMethod::kLp, ProbeMethod::kNlgs, ProbeMethod::kLemke, ProbeMethod::kCd})
     if (name == method_name(m)) return m;
-  throw Error("--method must be lp, nlgs or lemke (got '" + name + "')");
+  throw Error("--method must be lp, nlgs, lemke or cd (got '" + name + "')");
+}
+
+CampaignSettings campaign_settings_for(const Packing& p) {
+  CompactionSettings cs;
+  GasSettings gas;
+  from_json(p.meta.settings, cs, gas);
+  CampaignSettings s;
+  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
+  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  return s;
+}
+
+void validate(const CampaignSettings& s) {
+  const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
+      !positive(s.nlgs.velocity_tol))
+    throw Error("the probe's g, dt and velocity_tol must be positive");
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
@@ -118,6 +157,33 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
   return w.probe(p, s, contact);
 }
 
+std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings& s,
+                                        const std::vector<int>& contacts,
+                                        const std::function<bool()>& should_stop) {
+  const int M = static_cast<int>(p.contacts.size());
+  for (const int k : contacts)
+    if (k < 0 || k >= M)
+      throw Error("contact " + std::to_string(k) + ": the packing has " + std::to_string(M) + " contacts");
+  std::vector<int> tasks(contacts.size());  // positions in `contacts`
+  std::iota(tasks.begin(), tasks.end(), 0);
+  std::vector<std::optional<ProbeResult>> results(contacts.size());
+  WorkLoop loop;
+  loop.should_stop = should_stop;
+  loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, &contacts); };
+  loop.gather = [&](std::vector<TaskResult>& done) {
+    for (TaskResult& tr : done) results[tr.task] = decode(tr.bytes);
+  };
+  LocalDistributor local;
+  local.run(tasks, loop);
+  // Tasks are handed out in order and every one handed out is finished: a stop leaves a prefix.
+  std::vector<ProbeResult> out;
+  for (std::optional<ProbeResult>& r : results) {
+    if (!r) break;
+    out.push_back(std::move(*r));
+  }
+  return out;
+}
+
 bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
                   const CampaignHooks& hooks) {
   LocalDistributor local;
@@ -137,16 +203,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   WorkLoop loop;
   loop.should_stop = hooks.should_stop;
-  loop.work = [&](WorkSource& source) {
-    work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; },
-             [&](Worker& w, int k) {
-               try {
-                 return encode(w.probe(p, s, k));
-               } catch (const std::exception& e) {
-                 throw Error("probe of contact " + std::to_string(k) + ": " + e.what());
-               }
-             });
-  };
+  loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, nullptr); };
   loop.gather = [&](std::vector<TaskResult>& results) {
     for (const TaskResult& tr : results) {
       const ProbeResult r = decode(tr.bytes);

@@ -25,9 +25,10 @@ enum class ProbeMethod {
   kLp,    // F_crit = LP maximum, field = kinematic problem at the optimum (fast)
   kNlgs,  // the paper's contact-dynamics probe (reference, slow)
   kLemke, // the same step solved exactly by Lemke's method (dense: small packings)
+  kCd,    // the same step followed exactly from the static network (sparse: probe/cd_path)
 };
 
-// "lp", "nlgs", "lemke"; method_from_name throws unjam::Error for any other name.
+// "lp", "nlgs", "lemke", "cd"; method_from_name throws unjam::Error for any other name.
 const char* method_name(ProbeMethod method);
 ProbeMethod method_from_name(const std::string& name);
 
@@ -74,6 +75,13 @@ struct CampaignSummary {
   std::string fit_error;             // why there is no fit (e.g. cell too small)
 };
 
+// The settings `unjam probe` starts from: the defaults, with the packing's touch gap (of its
+// static solve) and bath mass M_lambda, as recorded in meta.settings.
+CampaignSettings campaign_settings_for(const Packing& packing);
+
+// Throws unjam::Error unless g, dt and velocity_tol are positive and finite.
+void validate(const CampaignSettings& settings);
+
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
 
@@ -91,6 +99,16 @@ bool run_campaign(const Packing& packing, const CampaignSettings& settings, Camp
 
 // Probes one contact with the campaign's method.
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
+
+// Probes every contact of `contacts` (indices into packing.contacts, any order, repeats
+// allowed) with the campaign's method, on omp_get_max_threads() threads as run_campaign does
+// (one probe per thread at a time; each thread keeps its LP model): the results in the order
+// of `contacts`, the same bytes for any thread count. should_stop (may be empty) is polled
+// before every probe is handed out; once it returns true, the results of the probes already
+// handed out (a prefix of `contacts`) are returned. Throws unjam::Error for an index out of range.
+std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
+                                        const std::vector<int>& contacts,
+                                        const std::function<bool()>& should_stop = {});
 
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "unjam/core/vec2.hpp"
+#include "unjam/packing/export.hpp"
 #include "unjam/packing/packing.hpp"
 
 namespace unjam {
@@ -33,5 +34,8 @@ inline constexpr double kNoSolution = std::numeric_limits<double>::max();
 // (the cell's affine strain stretches the branch vector l; length units). The probed pair
 // must open by g, a touching pair must not go below zero.
 double contact_opening(const Packing& packing, const ProbeResult& r, int k);
+
+// The probe's field for the exports (packing/export.hpp): u, u / g and the rotations.
+GrainDisplacement grain_displacement(const ProbeResult& r);
 
 }  // namespace unjam

@@ -62,4 +62,19 @@ void from_json(const nlohmann::json& j, CompactionSettings& s, GasSettings& g) {
   }
 }
 
+void prepare_compaction(Packing& p, CompactionSettings& settings, const GasSettings& gas,
+                        const std::string& command) {
+  settings.dynamics.bath.P_ext = p.meta.P_ext;
+  validate(settings, p.meta.mu);
+  p.meta.settings = to_json(settings, gas);
+  p.meta.command = command;
+}
+
+void prepare_relaxation(Packing& p, double mu, double P_ext, CompactionSettings& settings,
+                        GasSettings& gas) {
+  from_json(p.meta.settings, settings, gas);
+  p.meta.mu = mu;
+  p.meta.P_ext = P_ext;
+}
+
 }  // namespace unjam

@@ -1,0 +1,48 @@
+#pragma once
+// The Python module `unjam` (pybind11) over the library: what each binding file registers,
+// and the Ctrl-C poll of the long calls. Long calls release the GIL; while they run,
+// SignalPoll lets Python's signal handlers run now and then, and a KeyboardInterrupt stops
+// the call at the library's next stop point (CompactionHooks, ForceBoundsOptions::should_stop,
+// between probes).
+#include <chrono>
+#include <thread>
+
+#include <pybind11/pybind11.h>
+
+namespace unjam::python {
+
+namespace py = pybind11;
+
+void bind_packing(py::module_& m);
+void bind_compute(py::module_& m);
+
+// A should_stop hook: from the calling thread only, at most every 0.1 s, it takes the GIL
+// and runs PyErr_CheckSignals; after a KeyboardInterrupt (or any error a handler raised)
+// it answers true, leaving the Python error set for rethrow_if_interrupted().
+class SignalPoll {
+ public:
+  bool operator()();
+  bool interrupted() const { return interrupted_; }
+  // With the GIL held: raises the pending Python error if a handler raised one.
+  void rethrow_if_interrupted() const;
+
+ private:
+  std::thread::id owner_ = std::this_thread::get_id();
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+  bool interrupted_ = false;
+};
+
+// Sets the OpenMP thread count of the calling thread for one call (0: leave it), and puts
+// the previous count back.
+class ThreadCount {
+ public:
+  explicit ThreadCount(int threads);
+  ~ThreadCount();
+  ThreadCount(const ThreadCount&) = delete;
+  ThreadCount& operator=(const ThreadCount&) = delete;
+
+ private:
+  int previous_;
+};
+
+}  // namespace unjam::python

@@ -1,0 +1,307 @@
+// unjam.pack, unjam.probe, unjam.bounds, unjam.stats and unjam.export: the library calls of
+// `unjam pack`, `probe --contact`, `bounds`, `info --json` and `export`, with the tool's
+// defaults (taken from the library's settings structs where the tool takes them too).
+#include <omp.h>
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include "python/bindings.hpp"
+#include "unjam/analysis/packing_stats.hpp"
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/packing/export.hpp"
+#include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/probe_campaign.hpp"
+#include "unjam/protocol/compaction.hpp"
+#include "unjam/protocol/gas.hpp"
+#include "unjam/protocol/settings_json.hpp"
+
+namespace unjam::python {
+namespace {
+
+struct PackArgs {
+  GasSettings gas;
+  CompactionSettings compaction;
+  double mu = 0.1, P_ext = 1.0;
+  int threads = 0;
+  std::optional<std::filesystem::path> out;
+  std::optional<py::function> progress;  // called every 2 s with a dict (CompactionProgress)
+};
+
+py::dict progress_dict(const CompactionProgress& g) {
+  py::dict d;
+  d["step"] = g.step;
+  d["time"] = g.time;
+  d["phi"] = g.phi;
+  d["P_in_over_P_ext"] = g.P_ratio;
+  d["v_mean"] = g.v_mean;
+  d["sweeps_per_step"] = g.sweeps_per_step;
+  d["contacts"] = g.contacts;
+  d["elapsed_s"] = g.elapsed_s;
+  d["eta_s"] = g.eta_s < 0.0 ? py::object(py::none()) : py::object(py::float_(g.eta_s));
+  d["static_attempts"] = g.static_attempts;
+  return d;
+}
+
+// The call recorded in meta.json as the command that made the packing.
+std::string call_record(bool from_gas, const PackArgs& a) {
+  char buf[256];
+  if (from_gas)
+    std::snprintf(buf, sizeof buf, "python: unjam.pack(n=%d, mu=%.17g, seed=%llu, p_ext=%.17g, threads=%d)",
+                  a.gas.N, a.mu, static_cast<unsigned long long>(a.gas.seed), a.P_ext, a.threads);
+  else
+    std::snprintf(buf, sizeof buf, "python: unjam.relax(packing, mu=%.17g, p_ext=%.17g, threads=%d)",
+                  a.mu, a.P_ext, a.threads);
+  return buf;
+}
+
+// compact() of a prepared packing, GIL released, with Ctrl-C, the progress callback and, with
+// `out`, checkpoints and the result there (also a stopped run, to resume with
+// `unjam pack --resume OUT`). An exception of the progress callback stops the compaction and
+// is raised.
+Packing run_compaction(Packing p, const PackArgs& a) {
+  SignalPoll poll;
+  CompactionResult r;
+  std::optional<py::error_already_set> callback_error;
+  {
+    py::gil_scoped_release release;
+    const ThreadCount threads(a.threads);
+    CompactionHooks hooks;
+    hooks.should_stop = [&] { return callback_error.has_value() || poll(); };
+    if (a.progress)
+      hooks.progress = [&](const CompactionProgress& g) {
+        py::gil_scoped_acquire gil;
+        try {
+          (*a.progress)(progress_dict(g));
+        } catch (py::error_already_set& e) {
+          callback_error = std::move(e);
+        }
+      };
+    if (a.out) {
+      hooks.checkpoint = [&a](const Packing& q) { write_packing(*a.out, q); };
+      hooks.checkpoint_s = 60.0;
+    }
+    r = compact(p, a.compaction, hooks);
+    if (a.out) write_packing(*a.out, p);
+  }
+  if (callback_error) throw std::move(*callback_error);
+  poll.rethrow_if_interrupted();
+  if (!r.is_static) throw Error("no static packing within max_steps");
+  return p;
+}
+
+// `unjam pack --n ... --out OUT`: a gas compacted into a static packing.
+Packing pack(PackArgs a) {
+  Packing p = make_gas(a.gas);
+  p.meta.mu = a.mu;
+  p.meta.P_ext = a.P_ext;
+  prepare_compaction(p, a.compaction, a.gas, call_record(true, a));
+  return run_compaction(std::move(p), a);
+}
+
+// `unjam pack --from DIR --mu MU --p-ext P --out OUT`: the packing re-relaxed at mu and p_ext
+// with the settings it was made with.
+Packing relax(const Packing& from, double mu, double p_ext, int threads,
+              std::optional<std::filesystem::path> out, std::optional<py::function> progress) {
+  Packing p = from;
+  PackArgs a;
+  prepare_relaxation(p, mu, p_ext, a.compaction, a.gas);
+  a.mu = mu;
+  a.P_ext = p_ext;
+  a.threads = threads;
+  a.out = std::move(out);
+  a.progress = std::move(progress);
+  prepare_compaction(p, a.compaction, a.gas, call_record(false, a));
+  return run_compaction(std::move(p), a);
+}
+
+CampaignSettings probe_settings(const Packing& p, const std::string& method, double g, double dt,
+                                double velocity_tol, long long max_sweeps) {
+  CampaignSettings s = campaign_settings_for(p);
+  s.method = method_from_name(method);
+  s.nlgs.g = s.kinematic.g = g;
+  s.nlgs.dt = dt;
+  s.nlgs.velocity_tol = velocity_tol;
+  s.nlgs.max_sweeps = max_sweeps;
+  validate(s);
+  return s;
+}
+
+// probe_contacts (in parallel, Ctrl-C checked between batches): a ProbeResult for contact=K,
+// a list in the order of contacts=[...].
+py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
+                 const std::string& method, double g, double dt, double velocity_tol, long long max_sweeps,
+                 int threads) {
+  if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
+  const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
+  const CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
+  std::vector<ProbeResult> results;
+  SignalPoll poll;
+  {
+    py::gil_scoped_release release;
+    const ThreadCount count(threads);
+    results = probe_contacts(p, s, list, [&poll] { return poll(); });
+  }
+  poll.rethrow_if_interrupted();
+  if (contact) return py::cast(std::move(results.front()));
+  return py::cast(std::move(results));
+}
+
+py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method) {
+  if (method != "barrier" && method != "simplex") throw Error("method must be barrier or simplex");
+  ForceBoundsOptions lp;
+  lp.method = method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
+  SignalPoll poll;
+  lp.should_stop = [&poll] { return poll(); };
+  std::optional<EquilibriumSystem> sys;
+  ForceBounds b;
+  RankInfo rank;
+  try {
+    py::gil_scoped_release release;
+    const ThreadCount count(threads);
+    lp.threads = omp_get_max_threads();
+    sys = build_equilibrium_system(p, select_contacts(p, gap_tol, fn_tol));
+    rank = equilibrium_rank(*sys);
+    b = compute_force_bounds(*sys, lp);  // incomplete if should_stop stopped it
+  } catch (const Error&) {
+    poll.rethrow_if_interrupted();
+    throw;
+  }
+  poll.rethrow_if_interrupted();
+  const int Nc = sys->num_contacts();
+  py::array_t<int> contact(Nc), a(Nc), bb(Nc);
+  py::array_t<double> fn(Nc);
+  for (int k = 0; k < Nc; ++k) {
+    const Contact& c = p.contacts[sys->contacts[k]];
+    contact.mutable_at(k) = sys->contacts[k];
+    a.mutable_at(k) = c.a;
+    bb.mutable_at(k) = c.b;
+    fn.mutable_at(k) = c.fn;
+  }
+  py::dict d;
+  d["contact"] = contact;
+  d["a"] = a;
+  d["b"] = bb;
+  d["fn"] = fn;
+  d["fn_min"] = py::array_t<double>(Nc, b.fn_min.data());
+  d["fn_max"] = py::array_t<double>(Nc, b.fn_max.data());
+  d["dimension"] = rank.dimension;
+  d["rank"] = rank.rank;
+  d["min_lps_skipped"] = b.min_lps_skipped;
+  return d;
+}
+
+py::object stats(const Packing& p, double threshold) {
+  if (!(threshold >= 0.0)) throw Error("threshold must be a non-negative number");
+  const nlohmann::ordered_json j = stats_json(p, compute_packing_stats(p, threshold), threshold, "");
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+void export_packing(const Packing& p, const std::filesystem::path& path, const std::string& format,
+                    const ProbeResult* probe) {
+  if (format != "vtk" && format != "xyz") throw Error("format must be vtk or xyz");
+  std::optional<GrainDisplacement> field;
+  if (probe) field = grain_displacement(*probe);
+  const ExportRecord record{"", "python: unjam.export(format=" + format + ")"};
+  const GrainDisplacement* f = field ? &*field : nullptr;
+  write_file_atomic(path, format == "vtk" ? vtk_polydata(p, f, record) : extended_xyz(p, f, record));
+}
+
+py::array u_view(py::object self) {
+  const ProbeResult& r = self.cast<const ProbeResult&>();
+  py::array a = py::array_t<double>({r.u.size(), std::size_t(2)}, {sizeof(Vec2), sizeof(double)},
+                                    r.u.empty() ? nullptr : r.u.front().data(), self);
+  a.attr("setflags")(py::arg("write") = false);
+  return a;
+}
+
+void bind_probe_result(py::module_& m) {
+  py::class_<ProbeResult>(m, "ProbeResult", "what one probe measures (PHYSICS.md section 6)")
+      .def_readonly("contact", &ProbeResult::contact)
+      .def_readonly("a", &ProbeResult::a)
+      .def_readonly("b", &ProbeResult::b)
+      .def_readonly("f_cont", &ProbeResult::f_cont, "normal force of the static packing")
+      .def_readonly("f_crit", &ProbeResult::f_crit, "normal force that opens the contact by g")
+      .def_readonly("g", &ProbeResult::g)
+      .def_readonly("lambda_dt", &ProbeResult::lambda_dt, "affine strain of the cell over the probe")
+      .def_readonly("converged", &ProbeResult::converged)
+      .def_readonly("sweeps", &ProbeResult::sweeps)
+      .def_readonly("residual", &ProbeResult::residual)
+      .def_readonly("violations", &ProbeResult::violations)
+      .def_property_readonly("u", &u_view, "(N, 2) float64 read-only view: peculiar displacement (R_max)")
+      .def_property_readonly("rot", [](py::object self) {
+        const ProbeResult& r = self.cast<const ProbeResult&>();
+        py::array a = py::array_t<double>({r.u_rot.size()}, {sizeof(double)}, r.u_rot.data(), self);
+        a.attr("setflags")(py::arg("write") = false);
+        return a;
+      }, "(N,) float64 read-only view: rotation of every grain (radians)");
+}
+
+}  // namespace
+
+void bind_compute(py::module_& m) {
+  bind_probe_result(m);
+  const PackArgs pd;
+  const CampaignSettings cd;
+  m.def("pack", [](int n, double mu, std::uint64_t seed, int threads, double p_ext, double phi_gas,
+                   double dt, double m_lambda, double tol, int max_sweeps, double static_tol,
+                   std::int64_t max_steps, std::optional<std::filesystem::path> out,
+                   std::optional<py::function> progress) {
+          PackArgs a;
+          a.gas.N = n;
+          a.gas.seed = seed;
+          a.gas.phi = phi_gas;
+          a.mu = mu;
+          a.P_ext = p_ext;
+          a.threads = threads;
+          a.out = std::move(out);
+          a.progress = std::move(progress);
+          auto& d = a.compaction.dynamics;
+          d.dt = dt;
+          d.bath.M_lambda = m_lambda;
+          d.nlgs.tol = tol;
+          d.nlgs.max_sweeps = max_sweeps;
+          a.compaction.final_solve.tol = static_tol;
+          a.compaction.max_steps = max_steps;
+          return pack(a);
+        },
+        py::arg("n") = pd.gas.N, py::arg("mu") = pd.mu, py::arg("seed") = pd.gas.seed,
+        py::arg("threads") = pd.threads, py::arg("p_ext") = pd.P_ext, py::arg("phi_gas") = pd.gas.phi,
+        py::arg("dt") = pd.compaction.dynamics.dt, py::arg("m_lambda") = pd.compaction.dynamics.bath.M_lambda,
+        py::arg("tol") = pd.compaction.dynamics.nlgs.tol, py::arg("max_sweeps") = pd.compaction.dynamics.nlgs.max_sweeps,
+        py::arg("static_tol") = pd.compaction.final_solve.tol, py::arg("max_steps") = pd.compaction.max_steps,
+        py::arg("out") = py::none(), py::arg("progress") = py::none(),
+        "compact a gas of n disks into a static packing, as `unjam pack` (same seed, same bytes); "
+        "progress: a callable given a dict (step, time, phi, P_in_over_P_ext, v_mean, contacts, "
+        "elapsed_s, eta_s, ...) every 2 s");
+  m.def("relax", &relax, py::arg("packing"), py::kw_only(), py::arg("mu"), py::arg("p_ext") = pd.P_ext,
+        py::arg("threads") = pd.threads, py::arg("out") = py::none(), py::arg("progress") = py::none(),
+        "re-relax a packing at friction mu and pressure p_ext with the settings it was made "
+        "with, as `unjam pack --from DIR --mu MU --p-ext P` (same bytes); the packing given "
+        "is not changed");
+  m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
+        py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
+        py::arg("g") = cd.nlgs.g, py::arg("dt") = cd.nlgs.dt, py::arg("velocity_tol") = cd.nlgs.velocity_tol,
+        py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("threads") = 0,
+        "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
+        "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`");
+  m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
+        py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
+        "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");
+  m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
+        "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
+  m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),
+        py::arg("format") = "vtk", py::arg("probe") = py::none(),
+        "write the packing for ParaView (format='vtk', .vtp) or OVITO ('xyz'), optionally with "
+        "a ProbeResult's displacement field, as `unjam export`");
+}
+
+}  // namespace unjam::python

@@ -1,0 +1,422 @@
+#include "unjam/probe/cd_path.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <unordered_set>
+#include <vector>
+
+#include <Eigen/Sparse>
+
+#include <klu.h>
+
+#include "unjam/contact/equilibrium_matrix.hpp"
+
+namespace unjam {
+
+namespace {
+
+// SuiteSparse's KLU on a matrix of fixed pattern: analysed once; factorised afresh with
+// partial pivoting, or, while it stays stable, refactorised with the previous pivot order
+// (several times cheaper). Stable means a reciprocal pivot growth (klu_rgrowth) above
+// kMinGrowth; below it the factorisation is done afresh.
+class Klu {
+ public:
+  Klu() { klu_defaults(&common_); }
+  ~Klu() {
+    if (numeric_) klu_free_numeric(&numeric_, &common_);
+    if (symbolic_) klu_free_symbolic(&symbolic_, &common_);
+  }
+  Klu(const Klu&) = delete;
+  Klu& operator=(const Klu&) = delete;
+
+  bool factorize(Eigen::SparseMatrix<double>& S, bool reuse_pivots) {
+    const int n = static_cast<int>(S.rows());
+    if (!symbolic_) symbolic_ = klu_analyze(n, S.outerIndexPtr(), S.innerIndexPtr(), &common_);
+    if (!symbolic_) return false;
+    if (numeric_ && reuse_pivots &&
+        klu_refactor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, numeric_, &common_) &&
+        klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, numeric_, &common_) &&
+        common_.rgrowth > kMinGrowth)
+      return true;
+    if (numeric_) klu_free_numeric(&numeric_, &common_);
+    numeric_ = klu_factor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, &common_);
+    ++fresh_;
+    return numeric_ != nullptr;
+  }
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) {
+    Eigen::VectorXd x = b;
+    klu_solve(symbolic_, numeric_, static_cast<int>(x.size()), 1, x.data(), &common_);
+    return x;
+  }
+
+  int fresh() const { return fresh_; }
+
+ private:
+  static constexpr double kMinGrowth = 1e-8;
+  klu_common common_;
+  klu_symbolic* symbolic_ = nullptr;
+  klu_numeric* numeric_ = nullptr;
+  int fresh_ = 0;
+};
+
+enum class State : std::int8_t { kOpen, kStick, kSlidePlus, kSlideMinus, kFrictionless };
+
+bool closed(State s) { return s != State::kOpen; }
+double slip_sign(State s) { return s == State::kSlidePlus ? 1.0 : s == State::kSlideMinus ? -1.0 : 0.0; }
+
+// One linear function of lambda that a state requires to stay >= 0, and the state the
+// contact takes when it would turn negative.
+struct Event {
+  double lambda = std::numeric_limits<double>::infinity();
+  double rate = 0.0;  // |slope| / scale, to break ties at one lambda
+  int contact = -1;
+  State next = State::kOpen;
+};
+
+// The unknowns x = (q / dt^2 over the rows of A, f = (fn_0, ft_0, ...)) and the system
+//   M (q / dt^2) - A f = -((1 - lambda) A f0 + lambda b)                   (balance)
+//   closed:  a_n^T q / dt^2 + kappa (fn - fref_n) = -(gap - lambda g [probed]) / dt^2
+//   stick:   a_t^T q / dt^2 + kappa (ft - fref_t) = 0
+//   slide s: w (ft + s mu fn) = 0;   open: w fn = 0, w ft = 0;   mu = 0: w ft = 0
+// (w = 1 / mean grain mass scales the algebraic rows like the kinematic ones). The grains'
+// rows are eliminated (M_G is diagonal), which leaves the sparse system S in (f, v_p) of
+// size 2 N_c + 1: the Delassus operator W = A_G^T M_G^-1 A_G on the kinematic rows, the
+// pressure row and column as its border. S is diagonally dominant where K had zero pivots.
+class StepPath {
+ public:
+  StepPath(const CdStepProblem& pb, const Eigen::VectorXd& f0, double kappa)
+      : pb_(pb), n_(static_cast<int>(pb.system.A.rows())), nc_(pb.num_contacts()),
+        mu_(pb.system.mu), dt2_(pb.dt * pb.dt), kappa_(kappa), f0_(f0), fref_(f0),
+        state_(nc_, State::kOpen) {
+    w_ = pb.inverse_mass.head(n_ - 1).mean();
+    // g_eff(lambda): the probed pair's opening grows from 0 to g; a touching pair without
+    // force starts open by a distinct ~1e-9 g that closes by lambda = 1, so that no two
+    // such pairs close at one lambda.
+    gap0_ = pb.g_eff;
+    gap1_ = Eigen::VectorXd::Zero(nc_);
+    gap0_[pb.probed] = 0.0;
+    gap1_[pb.probed] = -pb.g;
+    for (int k = 0; k < nc_; ++k)
+      if (k != pb.probed && pb.g_eff[k] <= 0.0 && !(f0[2 * k] > 0.0)) {
+        gap0_[k] = 1e-9 * pb.g * (1.0 + static_cast<double>(k) / nc_);
+        gap1_[k] = -gap0_[k];
+      }
+    Af0_ = pb.system.A * f0_;
+    const Eigen::SparseMatrix<double>& A = pb.system.A;
+    Eigen::SparseMatrix<double> A_G = A.topRows(n_ - 1);
+    Eigen::VectorXd minv_G = pb.inverse_mass.head(n_ - 1);
+    W_ = Eigen::SparseMatrix<double>(A_G.transpose()) * minv_G.asDiagonal() * A_G;
+    a_p_ = Eigen::VectorXd(A.row(n_ - 1).transpose());
+  }
+
+  const std::vector<State>& states() const { return state_; }
+  void start(const std::vector<State>& states) { state_ = states; }
+  void scale_compliance(double factor) { kappa_ *= factor; }
+
+  // Assembles and factorises the reduced system S of the current states. Its pattern does
+  // not depend on the states (inactive entries are stored as zeros), so it is analysed once.
+  bool factorize() {
+    std::vector<Eigen::Triplet<double>> t;
+    t.reserve(W_.nonZeros() + 6 * nc_ + 1);
+    for (int j = 0; j < W_.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(W_, j); it; ++it)
+        t.emplace_back(static_cast<int>(it.row()), j, active(static_cast<int>(it.row())) ? it.value() : 0.0);
+    for (int k = 0; k < nc_; ++k) {
+      const int rn = 2 * k, rt = rn + 1;
+      const State s = state_[k];
+      t.emplace_back(rn, rn, closed(s) ? kappa_ : w_);
+      t.emplace_back(rt, rt, s == State::kStick ? kappa_ : w_);
+      t.emplace_back(rt, rn, slip_sign(s) * mu_ * w_);
+    }
+    const int p = 2 * nc_;
+    for (int r = 0; r < 2 * nc_; ++r) {
+      if (a_p_[r] == 0.0) continue;
+      t.emplace_back(r, p, active(r) ? a_p_[r] : 0.0);
+      t.emplace_back(p, r, -a_p_[r]);
+    }
+    t.emplace_back(p, p, 1.0 / pb_.inverse_mass[n_ - 1]);
+    S_.resize(2 * nc_ + 1, 2 * nc_ + 1);
+    S_.setFromTriplets(t.begin(), t.end());
+    S_.makeCompressed();
+    return lu_.factorize(S_, reuse_pivots_);
+  }
+
+  // Contact k takes state s; K is factorised afresh (a low-rank update of the previous
+  // factors loses accuracy on the nearly singular K of a hyperstatic sticking set).
+  bool set_state(int k, State s) {
+    state_[k] = s;
+    return factorize();
+  }
+
+  // x(lambda) = x0 + lambda x1 of the current states.
+  void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) const {
+    Eigen::VectorXd r0 = Eigen::VectorXd::Zero(n_ + 2 * nc_), r1 = r0;
+    r0.head(n_) = -Af0_;
+    r1.head(n_) = -(pb_.system.rhs - Af0_);
+    for (int k = 0; k < nc_; ++k) {
+      const int rn = n_ + 2 * k, rt = rn + 1;
+      if (!closed(state_[k])) continue;
+      r0[rn] = -gap0_[k] / dt2_ + kappa_ * fref_[2 * k];
+      r1[rn] = -gap1_[k] / dt2_;
+      if (state_[k] == State::kStick) r0[rt] = kappa_ * fref_[2 * k + 1];
+    }
+    x0 = solve_full(r0);
+    x1 = solve_full(r1);
+  }
+
+  // The contact displacements A^T (q / dt^2) of x0 and x1, which the event functions read.
+  void displacements(const Eigen::VectorXd& x0, const Eigen::VectorXd& x1) {
+    u0_ = pb_.system.A.transpose() * x0.head(n_);
+    u1_ = pb_.system.A.transpose() * x1.head(n_);
+  }
+
+  // Compliant slip c_t of open contact k (ft = 0) at lambda on the current piece.
+  double slip(int k, double lambda) const {
+    return u0_[2 * k + 1] + lambda * u1_[2 * k + 1] - kappa_ * fref_[2 * k + 1];
+  }
+
+  // Calls fn(a, b, scale, next) for every function a + lambda b >= 0 that contact k's
+  // state requires (scale: g / dt^2 for displacements, F0 for forces), with the state the
+  // contact takes where it would turn negative.
+  template <class Fn>
+  void for_each_condition(int k, const Eigen::VectorXd& x0, const Eigen::VectorXd& x1, Fn&& fn) const {
+    const double u_scale = pb_.g / dt2_, f_scale = pb_.system.F0;
+    const int in = n_ + 2 * k, it = in + 1;
+    const double fn0 = x0[in], fn1 = x1[in], ft0 = x0[it], ft1 = x1[it];
+    switch (state_[k]) {
+      case State::kOpen:
+        // compliant closing displacement c_n = u_n / dt^2 + kappa (fn - fref_n), fn = 0
+        fn(u0_[2 * k] + gap0_[k] / dt2_ - kappa_ * fref_[2 * k], u1_[2 * k] + gap1_[k] / dt2_, u_scale,
+           mu_ > 0.0 ? State::kStick : State::kFrictionless);
+        break;
+      case State::kStick:
+        fn(mu_ * fn0 - ft0, mu_ * fn1 - ft1, f_scale, State::kSlideMinus);
+        fn(mu_ * fn0 + ft0, mu_ * fn1 + ft1, f_scale, State::kSlidePlus);
+        fn(fn0, fn1, f_scale, State::kOpen);
+        break;
+      case State::kSlidePlus:
+      case State::kSlideMinus: {
+        const double s = slip_sign(state_[k]);
+        fn(fn0, fn1, f_scale, State::kOpen);
+        // compliant slip c_t = u_t / dt^2 + kappa (ft - fref_t) keeps the sign s
+        fn(s * (u0_[2 * k + 1] + kappa_ * (ft0 - fref_[2 * k + 1])), s * (u1_[2 * k + 1] + kappa_ * ft1),
+           u_scale, State::kStick);
+        break;
+      }
+      case State::kFrictionless: fn(fn0, fn1, f_scale, State::kOpen); break;
+    }
+  }
+
+  // The first event on the path x0 + lambda x1 from lambda_c in the direction sigma (+-1).
+  Event next_event(const Eigen::VectorXd& x0, const Eigen::VectorXd& x1, double lambda_c,
+                   double sigma) const {
+    Event best;
+    for (int k = 0; k < nc_; ++k)
+      for_each_condition(k, x0, x1, [&](double a, double b, double scale, State next) {
+        if (!(sigma * b < 0.0)) return;
+        const double step = std::max(0.0, sigma * (-a / b - lambda_c)), rate = std::abs(b) / scale;
+        if (step < best.lambda || (step == best.lambda && rate > best.rate))
+          best = {step, rate, k, next};
+      });
+    if (best.contact >= 0) best.lambda = lambda_c + sigma * best.lambda;
+    return best;
+  }
+
+  // The slope in lambda of the condition that contact k's new state frees on leaving
+  // `previous`: the one whose crossing would lead back to `previous` (an open pair has one
+  // condition). It is zero at the switch; its sign alone says which way the path goes on.
+  double freed_slope(int k, State previous, const Eigen::VectorXd& x0, const Eigen::VectorXd& x1) const {
+    double slope = 0.0;
+    bool found = false;
+    for_each_condition(k, x0, x1, [&](double, double b, double scale, State next) {
+      if (found) return;
+      if (state_[k] == State::kOpen || next == previous ||
+          (previous == State::kOpen && next == State::kOpen)) {
+        slope = b / scale;
+        found = true;
+      }
+    });
+    return slope;
+  }
+
+  Eigen::VectorXd forces(const Eigen::VectorXd& x) const { return x.tail(2 * nc_); }
+
+ private:
+  // Row r of the force unknowns (fn_k at 2k, ft_k at 2k + 1) holds a kinematic condition.
+  bool active(int r) const {
+    const State s = state_[r / 2];
+    return r % 2 == 0 ? closed(s) : s == State::kStick;
+  }
+
+  // The full system K x = r, x = (v, f), by the reduced one: v_G = M_G^-1 (r_G + A_G f),
+  // so a kinematic row a_r^T v + (D f)_r = r_r reads (a_r^T M_G^-1 A_G + D) f + a_pr v_p =
+  // r_r - a_r^T M_G^-1 r_G, and the pressure row m_p v_p - a_p^T f = r_p stays as it is.
+  Eigen::VectorXd solve_full(const Eigen::VectorXd& r) const {
+    const int p = n_ - 1;
+    Eigen::VectorXd t = pb_.inverse_mass.cwiseProduct(r.head(n_));
+    t[p] = 0.0;
+    const Eigen::VectorXd At = pb_.system.A.transpose() * t;
+    Eigen::VectorXd y(2 * nc_ + 1);
+    for (int i = 0; i < 2 * nc_; ++i) y[i] = r[n_ + i] - (active(i) ? At[i] : 0.0);
+    y[2 * nc_] = r[p];
+    y = lu_.solve(y);
+    Eigen::VectorXd x(n_ + 2 * nc_);
+    x.tail(2 * nc_) = y.head(2 * nc_);
+    x.head(n_) = pb_.inverse_mass.cwiseProduct(r.head(n_) + pb_.system.A * y.head(2 * nc_));
+    x[p] = y[2 * nc_];
+    return x;
+  }
+
+  const CdStepProblem& pb_;
+  int n_, nc_;
+  double mu_, dt2_, kappa_, w_ = 1.0;
+  Eigen::VectorXd f0_, fref_, Af0_, u0_, u1_;
+  Eigen::VectorXd gap0_, gap1_;  // g_eff(lambda) = gap0 + lambda gap1
+  std::vector<State> state_;
+  Eigen::SparseMatrix<double> W_;  // A_G^T M_G^-1 A_G: the Delassus operator of the grains
+  Eigen::VectorXd a_p_;            // the pressure row of A
+  Eigen::SparseMatrix<double> S_;
+  mutable Klu lu_;
+  bool reuse_pivots_ = true;
+};
+
+// A 64-bit hash of the state set and the direction (collisions: ~pieces^2 / 2^64).
+std::size_t state_key(const std::vector<State>& states, double sigma) {
+  std::string key(states.size() + 1, '\0');
+  for (std::size_t k = 0; k < states.size(); ++k) key[k] = static_cast<char>(states[k]);
+  key.back() = sigma > 0.0 ? '+' : '-';
+  return std::hash<std::string>{}(key);
+}
+
+
+// One path at compliance `compliance` (CdPathSettings::compliance); f empty where it fails.
+CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
+                      double compliance, CdPathStats& stats) {
+  const int nc = pb.num_contacts(), contact = pb.probed;
+  const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
+  // The static network, its tangential forces drawn into the cone's interior by distinct
+  // relative amounts ~1e-9: a contact at the cone's edge (fully mobilised) starts sticking
+  // and its event happens at its own lambda, so that no two events tie at lambda = 0. The
+  // path starts from that network's own balance A f0 (the balance rows' lambda term).
+  Eigen::VectorXd f0 = packing_forces(packing, pb.system);
+  for (int k = 0; k < nc; ++k) f0[2 * k + 1] *= 1.0 - 1e-9 * (1.0 + static_cast<double>(k) / nc);
+  StepPath path(pb, f0, compliance * pb.g / (dt2 * F0));
+
+  // The static network: loaded pairs closed (sticking), every other pair open.
+  std::vector<State> start(nc, State::kOpen);
+  for (int k = 0; k < nc; ++k)
+    if ((f0[2 * k] > 0.0 && pb.g_eff[k] <= 0.0) || k == contact)
+      start[k] = pb.system.mu > 0.0 ? State::kStick : State::kFrictionless;
+  path.start(start);
+
+  const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * nc + 1000;
+  // Follows the path; sigma = -1 where it turns back in lambda (a fold: the step has
+  // several solutions there, as the dynamics from rest would pass them by).
+  Eigen::VectorXd x0, x1;
+  double lambda = 0.0, sigma = 1.0;
+  std::unordered_set<std::size_t> visited;
+  bool ok = path.factorize();
+  if (ok) {
+    path.solve(x0, x1);
+    path.displacements(x0, x1);
+  }
+  while (ok) {
+    const Event e = path.next_event(x0, x1, lambda, sigma);
+    if (e.contact < 0 && sigma < 0.0) {  // a ray: no solution on this path
+      ok = false;
+      stats.failure = "ray";
+    }
+    if (e.contact < 0 || (sigma > 0.0 && e.lambda >= 1.0) || !ok) break;
+    // A path through a degenerate point (several conditions tight at once) can come back
+    // to a state set it has left: the pivoting cycles, and the probe has no solution here.
+    if (++stats.pieces > max_pieces || !visited.insert(state_key(path.states(), sigma)).second) {
+      ok = false;
+      stats.failure = stats.pieces > max_pieces ? "pieces" : "cycle";
+      break;
+    }
+    if (e.lambda == lambda) ++stats.degenerate;
+    lambda = e.lambda;
+    const State previous = path.states()[e.contact];
+    // The contact crosses into the neighbouring piece of Coulomb's law: the cone's edge
+    // (stick <-> slide), the pair opening while sliding (slide <-> open) or closing, where
+    // it slides along its slip at closure. Where that piece's conditions do not hold beyond
+    // lambda, the path turns back in lambda (Lemke's rule: the path is one curve).
+    State next = e.next;
+    if (previous == State::kOpen && pb.system.mu > 0.0)
+      next = path.slip(e.contact, lambda) >= 0.0 ? State::kSlidePlus : State::kSlideMinus;
+    ok = path.set_state(e.contact, next);
+    if (!ok) break;
+    path.solve(x0, x1);
+    path.displacements(x0, x1);
+    if (sigma * path.freed_slope(e.contact, previous, x0, x1) < 0.0) sigma = -sigma;
+  }
+
+  CdStepSolution sol;
+  if (!ok && stats.failure.empty()) stats.failure = "singular";
+  if (!ok) return sol;
+  // lambda = 1 on the last piece; the compliance's own displacements (kappa dt^2 |f - f0|,
+  // ~ compliance g) are then removed by solving the last state's system again with kappa
+  // ten times smaller, while that lowers the step's residual.
+  sol.f = path.forces(x0 + x1);
+  sol.residual = cd_step_residual(pb, sol.f);
+  for (int r = 0; r < ps.refinements && sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
+    path.scale_compliance(0.1);
+    if (!path.factorize()) break;
+    path.solve(x0, x1);
+    const Eigen::VectorXd f = path.forces(x0 + x1);
+    const CdStepResidual res = cd_step_residual(pb, f);
+    ++stats.refinements;
+    if (!(res.max() < sol.residual.max())) break;
+    sol.f = f;
+    sol.residual = res;
+  }
+  for (int k = 0; k < nc; ++k) {
+    const State s = path.states()[k];
+    if (s == State::kOpen && k != contact) ++stats.open;
+    if (s == State::kSlidePlus || s == State::kSlideMinus) ++stats.sliding;
+  }
+  return sol;
+}
+
+}  // namespace
+
+CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
+                             const CdPathSettings& ps, CdPathStats* stats_out) {
+  const CdStepProblem pb = build_cd_step(packing, contact, settings);
+  // The compliance trades the conditioning of the sticking set's system against its own
+  // displacements; where the path at ps.compliance is not exact, it is followed again at ten
+  // times it, then a tenth of it, and the solution with the lowest residual is kept.
+  CdStepSolution best;
+  CdPathStats best_stats;
+  for (const double factor : {1.0, 10.0, 0.1}) {
+    if (factor != 1.0 && !ps.retry) break;
+    CdPathStats stats;
+    CdStepSolution sol = follow(pb, packing, ps, factor * ps.compliance, stats);
+    stats.attempts = best_stats.attempts + 1;
+    const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
+    if (better || best_stats.attempts == 0) {
+      best = std::move(sol);
+      best_stats = stats;
+    } else {
+      best_stats.attempts = stats.attempts;
+    }
+    if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
+  }
+  // A path that ends on a nearly singular state set returns forces far from any solution;
+  // those are no solution, not a probe to average.
+  if (best.f.size() > 0 && !(best.residual.max() <= kMaxPathResidual)) {
+    best.f.resize(0);
+    best_stats.failure = "inexact";
+  }
+  best.result = cd_step_result(pb, packing, settings, best.f);
+  best.result.sweeps = best_stats.pieces;
+  if (stats_out) *stats_out = best_stats;
+  return best;
+}
+
+}  // namespace unjam

@@ -1,0 +1,67 @@
+#pragma once
+// The paper's probe step solved exactly along a path from the static packing
+// (docs/probe.md, "The exact step followed from the static network: `--method cd`").
+//
+// The step of probe/cd_step.hpp is followed as the prescribed opening grows from 0 to g:
+// lambda in [0, 1] scales the probed contact's opening, g_eff = gap - lambda g e_probed,
+// and moves the load from the static network's own balance A f0 to b. At lambda = 0 the
+// static network itself is the solution (q = 0, f = f0). On each piece of the path every
+// contact keeps one state:
+//     open    fn = ft = 0
+//     stick   u_n = 0, u_t = 0                 (force anywhere in the cone)
+//     slide s u_n = 0, ft = -s mu fn           (slip along s = +1 or -1; mu = 0: ft = 0)
+// so the step is one sparse linear system in (q / dt^2, f), linear in lambda; the piece
+// ends where the first contact would break its state's inequalities (a force leaves the
+// cone or turns tensile, a slip reverses, an open pair closes), that contact changes state
+// and the path goes on. This is a parametric principal pivoting method; it reaches the
+// solution connected to the static network, the one a step started from rest follows.
+//
+// A hyperstatic set of sticking contacts leaves forces undetermined; the path therefore
+// carries a small compliance kappa (u + kappa dt^2 (f - f_ref) = 0 on closed contacts,
+// kappa a fraction `compliance` of g / (dt^2 F0)), and at lambda = 1 the last state's
+// system is solved again with kappa / 10, / 100, ... while the step's residual
+// (cd_step_residual) falls. Where that is not exact, the path is followed again at ten times
+// and a tenth of the compliance (`retry`), and the lowest residual kept.
+//
+// Each piece solves the system with the grains' rows eliminated (M is diagonal): a sparse
+// matrix of size 2 N_c + 1 (the Delassus operator W = A^T M^-1 A on the kinematic rows,
+// bordered by the pressure row), factorised by SuiteSparse's KLU, which reuses its pivot
+// order from piece to piece while that stays stable.
+#include <string>
+
+#include "unjam/packing/packing.hpp"
+#include "unjam/probe/cd_step.hpp"
+#include "unjam/probe/nlgs_probe.hpp"
+
+namespace unjam {
+
+struct CdPathSettings {
+  double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
+  int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
+  int refinements = 4;        // solves at lambda = 1 with kappa / 10, / 100, ...
+  bool retry = true;          // where not exact: again at 10 x and 0.1 x the compliance
+};
+
+struct CdPathStats {
+  int pieces = 0;             // linear pieces of the path (state changes)
+  int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
+  int refinements = 0;
+  int attempts = 0;           // paths followed (1 + retries)
+  int open = 0, sliding = 0;  // final states (the probed contact not counted as open)
+  std::string failure;        // why there is no solution: "ray", "cycle", "pieces",
+                              // "singular", "inexact" (residual above kMaxPathResidual)
+};
+
+// Forces whose residual (g, F0) exceeds this are no solution; between kExactStepTolerance
+// and this, the probe is kept but not converged.
+inline constexpr double kMaxPathResidual = 1e-3;
+
+// Solves the step of probing packing.contacts[contact] (settings.g, dt, touch_gap, bath).
+// result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.
+// A path that exceeds max_pieces, comes back to a state set it left (cycling at a degenerate
+// point), ends on a ray or returns forces with a residual above kMaxPathResidual returns
+// residual kNoSolution.
+CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
+                             const CdPathSettings& path = {}, CdPathStats* stats = nullptr);
+
+}  // namespace unjam

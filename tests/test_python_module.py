@@ -1,0 +1,268 @@
+"""The Python module `unjam` against the `unjam` tool: the same seed gives the same bytes,
+arrays have the documented shapes, dtypes and units, bad arguments raise, Ctrl-C stops a
+long call. Run by ctest (python_module) with PYTHONPATH=build/<preset>/python and UNJAM set
+to the tool; by hand: PYTHONPATH=build/release/python UNJAM=build/release/unjam \
+/usr/bin/python3 -m pytest tests/test_python_module.py
+"""
+import csv
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import unjam
+
+UNJAM = os.environ.get("UNJAM", "build/release/unjam")
+FIXTURE = str(Path(__file__).parent / "fixtures" / "p50-mu0.1")
+
+
+def tool(*args, cwd=None):
+    """Runs the tool, returns its standard output; fails the test on an error."""
+    r = subprocess.run([UNJAM, *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def p50():
+    return unjam.read_packing(FIXTURE)
+
+
+def test_pack_equals_tool_bit_for_bit(tmp_path):
+    tool("pack", "--n", 40, "--mu", 0.1, "--seed", 5, "--out", tmp_path / "cli", "--quiet")
+    p = unjam.pack(n=40, mu=0.1, seed=5)
+    assert p.is_static and p.N == 40 and p.seed == 5
+    p.write(tmp_path / "py")
+    for table in ("particles.csv", "contacts.csv"):
+        assert (tmp_path / "cli" / table).read_bytes() == (tmp_path / "py" / table).read_bytes()
+    cli_meta = json.loads((tmp_path / "cli" / "meta.json").read_text())
+    py_meta = json.loads((tmp_path / "py" / "meta.json").read_text())
+    assert py_meta["command"].startswith("python: unjam.pack(n=40")
+    for meta in (cli_meta, py_meta):
+        meta.pop("command")
+    assert cli_meta == py_meta
+
+
+def test_packing_arrays_are_views_with_documented_shapes(p50):
+    text = read_csv(Path(FIXTURE) / "particles.csv")
+    N = len(text)
+    assert p50.N == N
+    assert p50.positions.shape == (N, 2) and p50.positions.dtype == np.float64
+    assert p50.radii.shape == (N,) and p50.radii.dtype == np.float64
+    assert [float(r["x"]) for r in text] == p50.x.tolist() == p50.positions[:, 0].tolist()
+    assert [float(r["radius"]) for r in text] == p50.radii.tolist()
+    assert p50.cell.shape == (2,) and p50.cell[0] * p50.cell[1] == pytest.approx(
+        np.pi * np.sum(p50.radii**2) / p50.phi)
+    # Views: the same memory every time, read-only, alive after the packing's name is dropped.
+    address = lambda a: a.__array_interface__["data"][0]
+    assert address(p50.x) == address(p50.x) and not p50.x.flags.writeable and not p50.x.flags.owndata
+    assert not np.shares_memory(p50.positions, p50.x)  # positions: a copy
+    with pytest.raises(ValueError):
+        p50.radii[0] = 2.0
+    c = p50.contacts
+    rows = read_csv(Path(FIXTURE) / "contacts.csv")
+    M = len(rows)
+    assert c.a.dtype == np.int32 and c.a.shape == (M,) and c.n.shape == (M, 2) and c.l.shape == (M, 2)
+    assert [int(r["b"]) for r in rows] == c.b.tolist()
+    for name in ("gap", "fn", "ft"):
+        assert [float(r[name]) for r in rows] == getattr(c, name).tolist()
+    assert [[float(r["lx"]), float(r["ly"])] for r in rows] == c.l.tolist()
+    # One array of structs: every column strides over whole contacts, fn follows gap.
+    assert not c.fn.flags.writeable and c.fn.strides == c.gap.strides == c.a.strides
+    assert c.fn.strides[0] >= 56 and address(c.fn) - address(c.gap) == 8
+    fn = unjam.read_packing(FIXTURE).contacts.fn  # the packing object is gone, the view stays
+    assert fn.tolist() == c.fn.tolist()
+
+
+def test_stats_equal_info_json(p50):
+    cli = json.loads(tool("info", FIXTURE, "--json"))
+    py = unjam.stats(p50)
+    assert cli.pop("packing") == FIXTURE and py.pop("packing") == ""
+    assert cli == py
+    assert py["rattlers"] >= 0 and 3.0 < py["z"] < 5.0
+
+
+def test_probe_equals_tool_bit_for_bit(tmp_path, p50):
+    tool("probe", FIXTURE, "--contact", 3, "--out", tmp_path)
+    r = unjam.probe(p50, contact=3)
+    rows = read_csv(tmp_path / "probe-3.csv")
+    assert r.u.shape == (p50.N, 2) and r.rot.shape == (p50.N,) and r.u.dtype == np.float64
+    assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
+    assert [float(x["rot"]) for x in rows] == r.rot.tolist()
+    assert (r.a, r.b) == (p50.contacts.a[3], p50.contacts.b[3]) and r.converged
+    # F_crit at full precision: the tool's probes.csv of a sample, the module on its contacts.
+    tool("probe", FIXTURE, "--sample", 3, "--out", tmp_path, "--quiet")
+    sample = read_csv(tmp_path / "probes.csv")
+    ks = np.array([int(x["contact"]) for x in sample] + [3])  # any sequence of ints, numpy too
+    results = unjam.probe(p50, contacts=ks, threads=2)
+    assert [q.contact for q in results] == ks.tolist()
+    assert [float(x["f_crit"]) for x in sample] == [q.f_crit for q in results[:-1]]
+    assert [float(x["f_cont"]) for x in sample] == [q.f_cont for q in results[:-1]]
+    assert results[-1].u.tolist() == r.u.tolist() and results[-1].f_crit == r.f_crit
+    # In parallel, each thread reusing its LP model: the same bytes for any thread count.
+    serial = unjam.probe(p50, contacts=ks[::-1], threads=1)[::-1]
+    assert [q.f_crit for q in serial] == [q.f_crit for q in results]
+    assert all(np.array_equal(q.u, s.u) and np.array_equal(q.rot, s.rot) for q, s in zip(results, serial))
+
+
+def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
+    tool("bounds", FIXTURE, "--threads", 1, "--out", tmp_path / "bounds.csv")
+    b = unjam.bounds(p50, threads=1)
+    rows = read_csv(tmp_path / "bounds.csv")
+    for name in ("fn", "fn_min", "fn_max"):
+        assert [float(x[name]) for x in rows] == b[name].tolist()
+    assert [int(x["a"]) for x in rows] == b["a"].tolist()
+    assert b["contact"].dtype == np.int32
+    assert np.all(p50.contacts.a[b["contact"]] == b["a"])
+    assert json.loads((tmp_path / "bounds.json").read_text())["dimension"] == b["dimension"]
+    assert np.all(b["fn_min"] <= b["fn"] + 1e-9) and np.all(b["fn"] <= b["fn_max"] + 1e-9)
+
+
+def help_defaults(command):
+    """{option: default} from `unjam COMMAND --help` (CLI11 prints "--n INT=500")."""
+    out = tool(command, "--help")
+    return {m[1]: m[2] for m in re.finditer(r"--([\w-]+) \w+=(\S+)", out)}
+
+
+def signature_defaults(function):
+    """{argument: default} from a pybind11 function's first docstring line."""
+    line = function.__doc__.splitlines()[0]
+    return {m[1]: m[2] for m in re.finditer(r"(\w+): [\w.\[\], |]+? = ([^,)]+)", line)}
+
+
+@pytest.mark.parametrize("command,function,names", [
+    ("pack", unjam.pack, {"n": "n", "mu": "mu", "seed": "seed", "threads": "threads",
+                          "p-ext": "p_ext", "phi-gas": "phi_gas", "dt": "dt", "m-lambda": "m_lambda",
+                          "tol": "tol", "max-sweeps": "max_sweeps", "static-tol": "static_tol",
+                          "max-steps": "max_steps"}),
+    ("probe", unjam.probe, {"method": "method", "g": "g", "dt": "dt",
+                            "velocity-tol": "velocity_tol", "max-sweeps": "max_sweeps"}),
+])
+def test_defaults_equal_the_tool(command, function, names):
+    cli, py = help_defaults(command), signature_defaults(function)
+    for option, argument in names.items():
+        a, b = cli[option], py[argument].strip("'")
+        assert a == b or float(a) == float(b), (option, a, b)
+
+
+def test_bad_arguments_raise(p50, tmp_path):
+    with pytest.raises(unjam.Error, match="does not exist"):
+        unjam.read_packing(tmp_path / "missing")
+    with pytest.raises(unjam.Error, match="exactly one"):
+        unjam.probe(p50)
+    with pytest.raises(unjam.Error, match="the packing has 82 contacts"):
+        unjam.probe(p50, contact=82)
+    with pytest.raises(unjam.Error, match="contact -1: the packing has 82"):
+        unjam.probe(p50, contacts=[0, -1])
+    with pytest.raises(unjam.Error, match="threads"):
+        unjam.probe(p50, contact=0, threads=-2)
+    with pytest.raises(unjam.Error, match="lp, nlgs or lemke"):
+        unjam.probe(p50, contact=0, method="simplex")
+    with pytest.raises(unjam.Error, match="must be positive"):
+        unjam.probe(p50, contact=0, g=-1.0)
+    with pytest.raises(unjam.Error, match="number of disks"):
+        unjam.pack(n=1)
+    with pytest.raises(unjam.Error, match="mu"):
+        unjam.pack(n=10, mu=-0.5)
+    with pytest.raises(unjam.Error, match="threads"):
+        unjam.pack(n=10, threads=-1)
+    with pytest.raises(unjam.Error, match="barrier or simplex"):
+        unjam.bounds(p50, method="interior")
+    with pytest.raises(unjam.Error, match="non-negative"):
+        unjam.stats(p50, threshold=-1.0)
+    with pytest.raises(unjam.Error, match="vtk or xyz"):
+        unjam.export(p50, tmp_path / "x.obj", format="obj")
+    with pytest.raises(TypeError):
+        unjam.pack(n="many")
+    assert issubclass(unjam.Error, ValueError)
+
+
+def test_ctrl_c_stops_a_long_pack(tmp_path):
+    """SIGINT during a long compaction: KeyboardInterrupt within a second, state saved."""
+    code = ("import unjam\n"
+            f"unjam.pack(n=4000, seed=1, threads=1, out={str(tmp_path / 'p')!r})\n")
+    proc = subprocess.Popen([sys.executable, "-c", code], stderr=subprocess.PIPE, text=True,
+                            env=os.environ.copy())
+    time.sleep(2.0)
+    assert proc.poll() is None, proc.stderr.read()
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert time.monotonic() - sent < 5.0
+    assert proc.returncode != 0 and "KeyboardInterrupt" in err
+    meta = json.loads((tmp_path / "p" / "meta.json").read_text())
+    assert meta["state"]["static"] is False and meta["state"]["step"] > 0
+
+
+def interrupted(code):
+    """Runs `code` in a fresh interpreter and sends SIGINT 0.3 s after it prints 'ready';
+    returns (seconds from SIGINT to exit, return code, stdout, stderr)."""
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=os.environ.copy())
+    assert proc.stdout.readline() == "ready\n", proc.stderr.read()
+    time.sleep(0.3)
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    return time.monotonic() - sent, proc.returncode, out, err
+
+
+@pytest.mark.parametrize("setup,call", [
+    # bounds (ForceBoundsOptions::should_stop): ~600 LPs of a 150-disk packing, stopped between LPs
+    ("p = unjam.pack(n=150, seed=3, threads=1)", "unjam.bounds(p, threads=2)"),
+    # probe(contacts=[...]): 1640 probes (~5 s of CPU), stopped between batches
+    (f"p = unjam.read_packing({FIXTURE!r})", "unjam.probe(p, contacts=list(range(82)) * 20, threads=2)"),
+])
+def test_ctrl_c_stops_a_long_call(setup, call):
+    seconds, rc, out, err = interrupted(
+        f"import unjam\n{setup}\nprint('ready', flush=True)\n{call}\nprint('done', flush=True)\n")
+    assert seconds < 5.0 and rc != 0 and "done" not in out
+    assert "KeyboardInterrupt" in err and "line 4" in err  # in the call
+
+
+def test_pack_progress_callback_and_its_exception():
+    """progress gets the compaction's report every 2 s; an exception it raises stops the
+    compaction and reaches the caller."""
+    reports = []
+
+    def progress(report):
+        reports.append(report)
+        raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        unjam.pack(n=4000, seed=1, threads=1, progress=progress)
+    assert len(reports) == 1
+    r = reports[0]
+    assert r["step"] > 0 and 0.0 < r["phi"] < 1.0 and r["elapsed_s"] >= 2.0 and r["contacts"] >= 0
+    assert set(r) >= {"time", "P_in_over_P_ext", "v_mean", "sweeps_per_step", "eta_s", "static_attempts"}
+
+
+def test_relax_equals_tool_from(tmp_path, p50):
+    """unjam.relax(p, mu=...) is `unjam pack --from DIR --mu ...`: the same bytes."""
+    tool("pack", "--from", FIXTURE, "--mu", 0.4, "--p-ext", 2.0, "--out", tmp_path / "cli", "--quiet")
+    before = np.array(p50.contacts.fn)
+    q = unjam.relax(p50, mu=0.4, p_ext=2.0)
+    assert q.mu == 0.4 and q.P_ext == 2.0 and q.is_static and q.seed == p50.seed
+    assert np.array_equal(p50.contacts.fn, before) and p50.mu == 0.1  # the packing given stays
+    q.write(tmp_path / "py")
+    for table in ("particles.csv", "contacts.csv"):
+        assert (tmp_path / "cli" / table).read_bytes() == (tmp_path / "py" / table).read_bytes()
+    cli_meta = json.loads((tmp_path / "cli" / "meta.json").read_text())
+    py_meta = json.loads((tmp_path / "py" / "meta.json").read_text())
+    assert py_meta.pop("command") == "python: unjam.relax(packing, mu=0.40000000000000002, p_ext=2, threads=0)"
+    cli_meta.pop("command")
+    assert cli_meta == py_meta
+    with pytest.raises(TypeError):
+        unjam.relax(p50)  # mu is required
