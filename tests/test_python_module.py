@@ -168,7 +168,7 @@ def test_bad_arguments_raise(p50, tmp_path):
         unjam.probe(p50, contacts=[0, -1])
     with pytest.raises(unjam.Error, match="threads"):
         unjam.probe(p50, contact=0, threads=-2)
-    with pytest.raises(unjam.Error, match="lp, nlgs or lemke"):
+    with pytest.raises(unjam.Error, match="lp, nlgs, lemke or cd"):
         unjam.probe(p50, contact=0, method="simplex")
     with pytest.raises(unjam.Error, match="must be positive"):
         unjam.probe(p50, contact=0, g=-1.0)

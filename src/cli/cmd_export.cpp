@@ -65,7 +65,7 @@ void add_export_command(CLI::App& app) {
       ->check(CLI::IsMember({"vtk", "xyz"}));
   cmd->add_option("--out", o->out, "output file (default DIR/packing.vtp|.xyz, DIR/probe-K.vtp|.xyz with --probe)");
   cmd->add_option("--probe", o->probe, "probe this contact and add its displacement field");
-  cmd->add_option("--method", o->method, "probe method of --probe: lp, nlgs or lemke")->capture_default_str();
+  cmd->add_option("--method", o->method, "probe method of --probe: lp, nlgs, lemke or cd")->capture_default_str();
   cmd->add_option("--field", o->field, "add the displacement field of a probe-K.csv (unjam probe --contact K)");
   cmd->callback([o] { run(*o); });
 }
