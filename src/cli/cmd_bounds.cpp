@@ -12,8 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -39,6 +41,9 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 void run_bounds(const BoundsOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   const Packing packing = read_packing(opt.dir);
+  const std::filesystem::path csv_path =
+      opt.out.empty() ? std::filesystem::path(opt.dir) / "bounds.csv" : std::filesystem::path(opt.out);
+  const DirLock lock(csv_path.has_parent_path() ? csv_path.parent_path() : ".", command_line());
   const EquilibriumSystem sys =
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
   const double t_build = seconds_since(t_start);
@@ -75,8 +80,6 @@ void run_bounds(const BoundsOptions& opt) {
     sum_fn += c.fn;
   }
   const double width_over_fn = sum_fn > 0.0 ? sum_width / sum_fn : 0.0;
-  const std::filesystem::path csv_path =
-      opt.out.empty() ? std::filesystem::path(opt.dir) / "bounds.csv" : std::filesystem::path(opt.out);
   std::filesystem::path json_path = csv_path;
   json_path.replace_extension(".json");
   write_file_atomic(csv_path, csv);
@@ -133,10 +136,12 @@ void add_bounds_command(CLI::App& app) {
                 "admissible force networks (LP)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
-  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)");
-  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0");
+  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
+      ->check(non_negative_number());
+  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
+      ->check(non_negative_number());
   cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
       ->check(CLI::IsMember({"barrier", "simplex"}));

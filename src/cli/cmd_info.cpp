@@ -9,6 +9,7 @@
 #include "cli/commands.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/packing/geometry_check.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace unjam::cli {
@@ -21,7 +22,8 @@ struct InfoOptions {
   double threshold = 1e-9;  // force-carrying: fn > threshold * F0
 };
 
-nlohmann::ordered_json stats_json(const std::string& dir, const Packing& p, const PackingStats& s, double threshold) {
+nlohmann::ordered_json stats_json(const std::string& dir, const Packing& p, const PackingStats& s,
+                                  const GeometryReport& g, double threshold) {
   nlohmann::ordered_json j = {
       {"packing", dir},
       {"program_version", p.meta.program_version},
@@ -50,12 +52,17 @@ nlohmann::ordered_json stats_json(const std::string& dir, const Packing& p, cons
       {"P_in_over_P_ext", s.pressure_ratio},
       {"max_coulomb_violation_over_F0", s.max_coulomb_violation},
       {"max_tension_over_F0", s.max_tension},
+      {"geometry_max_branch_mismatch", g.max_branch_mismatch},
+      {"geometry_max_normal_mismatch", g.max_normal_mismatch},
+      {"geometry_max_gap_mismatch", g.max_gap_mismatch},
+      {"geometry_worst_over_tolerance", g.worst_ratio},
   };
   if (s.isostatic_excess) j["isostatic_excess"] = *s.isostatic_excess;
   return j;
 }
 
-void print_text(const std::string& dir, const Packing& p, const PackingStats& s, double threshold) {
+void print_text(const std::string& dir, const Packing& p, const PackingStats& s, const GeometryReport& g,
+                double threshold) {
   auto row = [](const char* label, const std::string& value) { std::printf("%-34s %s\n", label, value.c_str()); };
   auto num = [](double v) {
     char buf[32];
@@ -85,6 +92,11 @@ void print_text(const std::string& dir, const Packing& p, const PackingStats& s,
   row("tension / F0: max", num(s.max_tension));
   if (s.isostatic_excess)
     row("isostatic count N_c - (2N' - 1)", std::to_string(*s.isostatic_excess));
+  // The contact rows against the positions (packing/geometry_check.hpp).
+  row("geometry mismatch: l / n / gap", num(g.max_branch_mismatch) + " / " + num(g.max_normal_mismatch) + " / " +
+                                            num(g.max_gap_mismatch) + "  (worst " + num(g.worst_ratio) +
+                                            " x tolerance" +
+                                            (g.worst_contact ? ", contact " + std::to_string(*g.worst_contact) : "") + ")");
 }
 
 }  // namespace
@@ -100,10 +112,11 @@ void add_info_command(CLI::App& app) {
     if (!(opt->threshold >= 0.0)) throw Error("--threshold must be a non-negative number");
     const Packing p = read_packing(opt->dir);
     const PackingStats s = compute_packing_stats(p, opt->threshold);
+    const GeometryReport g = check_geometry(p);
     if (opt->json)
-      std::printf("%s\n", stats_json(opt->dir, p, s, opt->threshold).dump(2).c_str());
+      std::printf("%s\n", stats_json(opt->dir, p, s, g, opt->threshold).dump(2).c_str());
     else
-      print_text(opt->dir, p, s, opt->threshold);
+      print_text(opt->dir, p, s, g, opt->threshold);
   });
 }
 

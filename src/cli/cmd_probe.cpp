@@ -10,9 +10,11 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
@@ -118,6 +120,10 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
+  if (!r.converged)
+    throw Error("the probe of contact " + std::to_string(r.contact) + " did not converge (method " + o.method +
+                ", residual " + std::to_string(r.residual) +
+                "): its F_crit and field are not a solution (nlgs: raise --max-sweeps)");
 }
 
 std::optional<FitWindow> fit_window(const ProbeOptions& o) {
@@ -127,20 +133,48 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
   return FitWindow{o.fit_window[0], o.fit_window[1]};
 }
 
+// The state an interrupted run saved, if it was made from this packing (its fingerprint) with
+// these settings. One made from another packing (or by a version that did not record it)
+// is set aside as probe_checkpoint.json.stale: its probes do not belong to this packing.
+// One with other settings is refused, as the options may be mistyped; so is a damaged one
+// (its state does not match the FNV-1a hash saved beside it).
+std::optional<CampaignState> saved_state(const fs::path& checkpoint, const std::string& fingerprint,
+                                         const nlohmann::json& settings) {
+  if (!fs::exists(checkpoint)) return std::nullopt;
+  const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
+  const auto packing = j.find("packing");
+  if (packing == j.end() || *packing != fingerprint) {
+    const fs::path stale = checkpoint.string() + ".stale";
+    rename_file(checkpoint, stale);
+    std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
+                 "starting over\n", checkpoint.c_str(), stale.c_str());
+    return std::nullopt;
+  }
+  if (j.value("settings", nlohmann::json{}) != settings)
+    throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
+  const auto state = j.find("state");
+  const auto sum = j.find("state_fnv1a64");
+  if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
+    throw Error(checkpoint.string() + " is damaged (its state does not match its checksum); remove it to start over");
+  return campaign_state_from_json(*state);
+}
+
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   fit_window(o);  // refuse a bad window before any probe runs
+  const int total = static_cast<int>(campaign_targets(p, s).size());
+  if (total == 0)
+    throw Error(o.dir + " has no force-carrying contact (fn > " + nlohmann::json(s.force_threshold).dump() +
+                " F0): nothing to probe");
   const fs::path checkpoint = out / "probe_checkpoint.json";
   const nlohmann::json settings_json = to_json(s);
+  const std::string fingerprint = packing_fingerprint(p);
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
-  if (fs::exists(checkpoint)) {
-    const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
-    if (j.is_discarded()) throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
-    if (j.value("settings", nlohmann::json{}) != settings_json)
-      throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
-    state = campaign_state_from_json(j.at("state"));
+  if (auto saved = saved_state(checkpoint, fingerprint, settings_json)) {
+    state = std::move(*saved);
     std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
   }
-  const int total = static_cast<int>(campaign_targets(p, s).size());
   std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads\n", total,
                o.dir.c_str(), o.method.c_str(), omp_get_max_threads());
 
@@ -148,7 +182,12 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   auto last_report = t0, last_checkpoint = t0;
   const std::size_t done_before = state.rows.size();
   const auto save_checkpoint = [&](const CampaignState& st) {
-    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(st)}}.dump());
+    const nlohmann::json state_json = to_json(st);
+    write_file_atomic(checkpoint, nlohmann::json{{"packing", fingerprint},
+                                                 {"settings", settings_json},
+                                                 {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
+                                                 {"state", state_json}}
+                                      .dump());
   };
   CampaignHooks hooks;
   hooks.progress = [&](int done, int all) {
@@ -176,7 +215,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!finished) {
     save_checkpoint(state);
-    throw Error("interrupted after " + std::to_string(state.rows.size()) +
+    throw Interrupted("stopped after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
   }
 
@@ -238,6 +277,7 @@ void run(const ProbeOptions& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
   const CampaignSettings s = campaign_settings(o, p);
   const fs::path out = o.out.empty() ? fs::path(o.dir) : fs::path(o.out);
+  const DirLock lock(out, command_line());
   if (o.contact >= 0) {
     if (o.contact >= static_cast<int>(p.contacts.size()))
       throw Error("--contact " + std::to_string(o.contact) + ": the packing has " +
@@ -254,10 +294,12 @@ void add_probe_command(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
   CLI::App* cmd = app.add_subcommand("probe", "open contacts by a tiny gap: critical force and displacement field");
   cmd->add_option("dir", o->dir, "static packing directory")->required();
-  cmd->add_option("--contact", o->contact, "probe this contact (row of contacts.csv, from 0)");
+  cmd->add_option("--contact", o->contact, "probe this contact (row of contacts.csv, from 0)")
+      ->check(non_negative_number());
   cmd->add_flag("--all", o->all, "probe every force-carrying contact");
-  cmd->add_option("--sample", o->sample, "probe a seeded random subset of this many force-carrying contacts");
-  cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str();
+  cmd->add_option("--sample", o->sample, "probe a seeded random subset of this many force-carrying contacts")
+      ->check(non_negative_number());
+  cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str()->check(seed_value());
   cmd->add_option("--method", o->method,
                   "lp: F_crit as the LP maximum and the kinematic field at its optimum (fast); "
                   "nlgs: the paper's contact-dynamics probe (reference, slow); "
@@ -266,14 +308,17 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
-  cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str();
-  cmd->add_option("--dt", o->dt, "nlgs, lemke: time step of the probe")->capture_default_str();
-  cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")->capture_default_str();
-  cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str();
+  cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--dt", o->dt, "nlgs, lemke: time step of the probe")->capture_default_str()->check(positive_number());
+  cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")
+      ->capture_default_str()->check(positive_number());
+  cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str()->check(positive_number());
   cmd->add_option("--displacement", o->displacement,
                   "displacement in the averages: peculiar, or total (with the affine part of the cell)")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
-  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")
+      ->capture_default_str()->check(non_negative_number());
+  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fit-window", o->fit_window,
                   "r_lo r_hi of the power-law fit of d(r) (R_max; default [<2R>, min(10 <2R>, L/2)])")
       ->expected(2);

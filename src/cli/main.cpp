@@ -18,10 +18,15 @@ int main(int argc, char** argv) {
   unjam::cli::add_probe_command(app);
   unjam::cli::add_bounds_command(app);
   unjam::cli::add_ensemble_command(app);
+  // Exit codes (README, "Exit codes"): 0 done, 1 error (bad input or parameters, a result
+  // that is not valid), 2 internal error, 3 interrupted with the state saved (resumable).
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : 1;  // --help and --version exit 0, CLI11's own codes are >= 100
+  } catch (const unjam::Interrupted& e) {
+    std::fprintf(stderr, "unjam: interrupted: %s\n", e.what());
+    return 3;
   } catch (const unjam::Error& e) {
     std::fprintf(stderr, "unjam: error: %s\n", e.what());
     return 1;
