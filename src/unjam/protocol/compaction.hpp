@@ -70,7 +70,7 @@ CompactionResult compact(Packing& packing, const CompactionSettings& settings,
                          const CompactionHooks& hooks = {});
 
 // Peak memory of a compaction of N disks, an upper estimate: 16 MB + 8 kB per disk. The
-// measured peak resident size is 13.5 MB at N = 1000 and 18.2 MB at N = 2000, i.e. ~4.7 kB
+// measured peak resident size is 13.6 MB at N = 1000 and 18.4 MB at N = 2000, i.e. ~4.9 kB
 // per disk (docs/benchmarks.md, "Memory"); the margin covers the fill of the static solve's
 // factorisation, which grows a little faster than N.
 std::size_t estimated_memory_bytes(std::size_t N);
