@@ -28,7 +28,6 @@ namespace fs = std::filesystem;
 using testing::run_tool;
 using testing::ToolRun;
 
-const fs::path kFixtures = UNJAM_FIXTURES_DIR;
 
 // A fresh directory under the temp dir, removed at the end of the test.
 class CliReliability : public ::testing::Test {
@@ -43,13 +42,7 @@ class CliReliability : public ::testing::Test {
   void TearDown() override { fs::remove_all(root_); }
 
   // A writable copy of a fixture packing.
-  fs::path copy(const std::string& fixture, const std::string& as) {
-    const fs::path dst = root_ / as;
-    fs::copy(kFixtures / fixture, dst, fs::copy_options::recursive);
-    for (const auto& e : fs::directory_iterator(dst))
-      fs::permissions(e.path(), fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::add);
-    return dst;
-  }
+  fs::path copy(const std::string& fixture, const std::string& as) { return testing::copy_fixture(fixture, root_, as); }
 
   fs::path root_;
 };

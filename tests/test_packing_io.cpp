@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_run.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/csv_table.hpp"
@@ -43,14 +44,7 @@ class TempDir {
   fs::path path_;
 };
 
-// A writable copy of a fixture packing.
-fs::path copy_fixture(const std::string& name, const fs::path& to) {
-  const fs::path dst = to / name;
-  fs::copy(kFixtures / name, dst, fs::copy_options::recursive);
-  for (const auto& e : fs::directory_iterator(dst))
-    fs::permissions(e.path(), fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::add);
-  return dst;
-}
+using testing::copy_fixture;
 
 void write_text(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 

@@ -32,24 +32,24 @@ CLI::Validator seed_value() {
       "SEED");
 }
 
-CLI::Validator non_negative_number() {
+namespace {
+
+// A finite number > 0 (positive) or >= 0.
+CLI::Validator finite_number_check(bool positive) {
+  const std::string bound = positive ? "> 0" : ">= 0";
   return CLI::Validator(
-      [](std::string& s) -> std::string {
+      [positive, bound](std::string& s) -> std::string {
         const auto v = finite_number(s);
-        if (!v || *v < 0.0) return "must be a finite number >= 0, got '" + s + "'";
+        if (!v || (positive ? !(*v > 0.0) : !(*v >= 0.0))) return "must be a finite number " + bound + ", got '" + s + "'";
         return {};
       },
-      "NUMBER >= 0");
+      "NUMBER " + bound);
 }
 
-CLI::Validator positive_number() {
-  return CLI::Validator(
-      [](std::string& s) -> std::string {
-        const auto v = finite_number(s);
-        if (!v || !(*v > 0.0)) return "must be a finite number > 0, got '" + s + "'";
-        return {};
-      },
-      "NUMBER > 0");
-}
+}  // namespace
+
+CLI::Validator non_negative_number() { return finite_number_check(false); }
+
+CLI::Validator positive_number() { return finite_number_check(true); }
 
 }  // namespace unjam::cli
