@@ -515,12 +515,26 @@ def parse_args(argv):
     p.add_argument("--mpirun", default="mpirun",
                    help="the MPI launcher of --mpi, split like a shell word list (default mpirun)")
     args = p.parse_args(argv)
+    # Every override is checked here, before any stage runs (unjam would refuse the same
+    # values only when their stage starts, hours into a run).
     if args.mpi < 0:
         p.error("--mpi must be >= 0")
     if args.threads < 0:
         p.error("--threads must be >= 0")
     if args.probe_sample is not None and args.probe_sample < 0:
         p.error("--probe-sample must be >= 0")
+    if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
+        p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
+    if args.ns is not None and not all(n >= 8 for n in args.ns):
+        p.error(f"--ns: every N must be at least 8 (fewer disks cannot jam), got {args.ns}")
+    if args.seeds is not None and not all(0 <= s < 2**64 for s in args.seeds):
+        p.error(f"--seeds: every seed must be an integer from 0 to 2^64 - 1, got {args.seeds}")
+    if args.samples is not None and args.samples <= 0:
+        p.error(f"--samples must be > 0, got {args.samples}")
+    if not (math.isfinite(args.probe_g) and args.probe_g > 0):
+        p.error(f"--probe-g must be a finite number > 0, got {args.probe_g}")
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        p.error(f"--out {args.out} is a file, not a directory")
     if not (os.path.isfile(args.unjam) and os.access(args.unjam, os.X_OK)):
         p.error(f"no unjam binary at {args.unjam} (build it: cmake --build build/release -j2)")
     return args
@@ -659,7 +673,12 @@ def main(argv=None):
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))
     out = os.path.abspath(args.out)
-    os.makedirs(out, exist_ok=True)
+    try:
+        os.makedirs(out, exist_ok=True)
+        os.makedirs(os.path.join(out, "logs"), exist_ok=True)
+    except OSError as e:
+        print(f"experiment: cannot create the output directory {out}: {e.strerror}", file=sys.stderr)
+        return 1
     launcher = shlex.split(args.mpirun) + ["-n", str(args.mpi)] if args.mpi > 0 else []
     R = Runner(out, os.path.abspath(args.unjam), args.threads, os.path.join(out, "logs"), launcher)
     try:

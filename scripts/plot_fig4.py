@@ -56,7 +56,10 @@ def main():
                         help="order of the contacts along x")
     args = parser.parse_args()
 
-    rows = read_rows(os.path.join(args.dir, "ensemble.csv"))
+    csv_path = os.path.join(args.dir, "ensemble.csv")
+    if not os.path.isfile(csv_path):
+        sys.exit(f"plot_fig4: error: no ensemble.csv in {args.dir} (run: unjam ensemble {args.dir})")
+    rows = read_rows(csv_path)
     if not rows:
         sys.exit("plot_fig4: ensemble.csv has no contacts")
     if "fn_min" not in rows[0]:

@@ -146,9 +146,12 @@ TEST(BadInput, MakeGasRejectsInvalidSettings) {
   bad([](GasSettings& s) { s.phi = 0.0; });
   bad([](GasSettings& s) { s.phi = 0.6; });
   bad([](GasSettings& s) { s.phi = std::numeric_limits<double>::quiet_NaN(); });
-  GasSettings two;
-  two.N = 2;
-  EXPECT_NO_THROW(make_gas(two));
+  // Fewer than 8 disks of radii in [0.5, 1] cannot jam in a periodic cell (gas.hpp).
+  bad([](GasSettings& s) { s.N = 7; });
+  GasSettings eight;
+  eight.N = 8;
+  EXPECT_EQ(min_jamming_grains(eight), 8);
+  EXPECT_NO_THROW(make_gas(eight));
 }
 
 TEST(BadInput, GasIsValid) {

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "shell_command.hpp"
+#include "cli_run.hpp"
 #include "unjam/core/atomic_file.hpp"
 
 namespace unjam {
@@ -21,11 +21,8 @@ namespace fs = std::filesystem;
 
 const fs::path kFixtures = UNJAM_FIXTURES_DIR;
 
-using test::CommandResult;
-
-CommandResult run_info(const std::string& args) {
-  return test::run_command(std::string("'") + UNJAM_BINARY + "' info " + args);
-}
+using CommandResult = testing::ToolRun;
+CommandResult run_info(const std::string& args) { return testing::run_tool("info " + args); }
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 
@@ -97,6 +94,31 @@ TEST(CliInfo, JsonHasTheSameNumbers) {
   EXPECT_NEAR(j.at("P_in_over_P_ext").get<double>(), 1.0, 1e-6);
   EXPECT_LT(j.at("max_force_residual_over_F0").get<double>(), 1e-11);
   EXPECT_FALSE(j.contains("isostatic_excess"));
+  // The contact rows fit the positions (packing/geometry_check.hpp): the gaps to rounding.
+  EXPECT_LT(j.at("geometry_worst_over_tolerance").get<double>(), 1.0);
+  EXPECT_LT(j.at("geometry_max_gap_mismatch").get<double>(), 1e-9);
+  EXPECT_LT(j.at("geometry_max_branch_mismatch").get<double>(), 1e-9);
+}
+
+TEST_F(BrokenCopy, WorstGeometryMismatchIsReported) {
+  // A branch vector off by 1e-7 R_max, within the tolerance: read, and shown by info.
+  std::string text = read("contacts.csv");
+  text.replace(text.find("0.63641642194092007"), 19, "0.63641652194092007");
+  write("contacts.csv", text);
+  const CommandResult r = run_info(quoted(dir_) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_NEAR(j.at("geometry_max_branch_mismatch").get<double>(), 1e-7, 1e-9);
+  EXPECT_GT(j.at("geometry_worst_over_tolerance").get<double>(), 0.05);
+  const CommandResult text_run = run_info(quoted(dir_));
+  EXPECT_NE(value_of(text_run.output, "geometry mismatch: l / n / gap").find("contact 1)"), std::string::npos)
+      << text_run.output;
+}
+
+TEST_F(BrokenCopy, FileInsteadOfDirectory) {
+  const CommandResult r = run_info(quoted(dir_ / "meta.json"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("is a file, not a packing directory"), std::string::npos) << r.output;
 }
 
 TEST_F(BrokenCopy, IsostaticCountShownAtMuZero) {

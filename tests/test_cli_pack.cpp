@@ -11,6 +11,7 @@
 #include <string>
 #include <thread>
 
+#include "cli_run.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/packing/packing_io.hpp"
 
@@ -19,21 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandRun {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-CommandRun unjam(const std::string& args) {
-  const std::string cmd = std::string(UNJAM_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
-  const int status = ::pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+using CommandRun = testing::ToolRun;
+CommandRun unjam(const std::string& args) { return testing::run_tool(args); }
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("unjam-cli-pack-" + name + "-" + std::to_string(::getpid()));
@@ -46,12 +34,12 @@ TEST(CliPack, InvalidParametersAreRefused) {
   const struct {
     std::string args, phrase;
   } cases[] = {
-      {"--n 1", "at least 2"},
-      {"--mu -0.1", "mu must be >= 0"},
-      {"--p-ext 0", "P_ext must be > 0"},
-      {"--dt -1", "time step dt must be > 0"},
+      {"--n 1", "at least 8"},
+      {"--mu -0.1", "mu must be a finite number >= 0"},
+      {"--p-ext 0", "P_ext must be a finite number > 0"},
+      {"--dt -1", "--dt: must be a finite number > 0, got '-1'"},
       {"--phi-gas 0.9", "gas packing fraction"},
-      {"--m-lambda 0", "M_lambda must be > 0"},
+      {"--m-lambda 0", "--m-lambda: must be a finite number > 0, got '0'"},
   };
   for (const auto& c : cases) {
     const CommandRun r = unjam("pack " + c.args + " --out " + out.string() + " --quiet");
@@ -97,7 +85,7 @@ TEST(CliPack, InterruptedRunLeavesAResumablePacking) {
   int status = 0;
   ::waitpid(pid, &status, 0);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1) << "an interrupted run reports failure";
+  EXPECT_EQ(WEXITSTATUS(status), 3) << "an interrupted run exits 3: stopped, resumable (README)";
 
   // The saved state is a complete packing, not yet static, with no temporary files left.
   const Packing stopped = read_packing(out);

@@ -190,5 +190,32 @@ class ExperimentTiny(unittest.TestCase):
             self.assertEqual(len(json.load(f)["ranks"]), 2)
 
 
+@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
+                     "build/release/unjam is missing")
+class ExperimentArguments(unittest.TestCase):
+    """Bad overrides are refused up front (a usage error, exit 2), before any stage runs."""
+
+    def test_bad_overrides_are_refused_before_any_stage(self):
+        with tempfile.TemporaryDirectory(prefix="unjam-experiment-args-") as tmp:
+            out = os.path.join(tmp, "exp")
+            for extra, phrase in [(["--seeds", "-1"], "--seeds"), (["--mus", "0.1", "nan"], "--mus"),
+                                  (["--mus", "-1"], "--mus"), (["--ns", "2"], "at least 8"),
+                                  (["--samples", "0"], "--samples"), (["--probe-g", "nan"], "--probe-g"),
+                                  (["--probe-g", "-1e-9"], "--probe-g")]:
+                p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out, *extra],
+                                   capture_output=True, text=True, cwd=REPO, timeout=60)
+                self.assertEqual(p.returncode, 2, (extra, p.stderr))
+                self.assertIn(phrase, p.stderr)
+                self.assertNotIn("Traceback", p.stderr)
+                self.assertFalse(os.path.exists(out), extra)
+
+    def test_unwritable_out_is_a_message_not_a_traceback(self):
+        p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", "/proc/unjam-x"],
+                           capture_output=True, text=True, cwd=REPO, timeout=60)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("cannot create the output directory", p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+
+
 if __name__ == "__main__":
     unittest.main()

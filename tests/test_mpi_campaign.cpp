@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "shell_command.hpp"
+#include "cli_run.hpp"
 #include "unjam/core/atomic_file.hpp"
 
 namespace unjam {
@@ -27,9 +27,9 @@ namespace fs = std::filesystem;
 
 const fs::path kP50 = fs::path(UNJAM_FIXTURES_DIR) / "p50-mu0.1";
 
-using test::CommandResult;
+using CommandResult = testing::ToolRun;
 
-CommandResult shell(const std::string& cmd) { return test::run_command(cmd); }
+CommandResult shell(const std::string& cmd) { return testing::run_command(cmd); }
 
 std::string unjam(int ranks, const std::string& args) {
   const std::string bin = std::string("'") + UNJAM_BINARY + "' " + args;
@@ -95,7 +95,7 @@ TEST_F(Distributed, ProbeOverTwoAndThreeRanksWritesTheBytesOfOneProcess) {
 
 TEST_F(Distributed, ProbeStoppedOnTwoRanksResumesOnThree) {
   const fs::path one = probe("one", 0);
-  const fs::path out = probe("resumed", 2, "--stop-after 20", 1);
+  const fs::path out = probe("resumed", 2, "--stop-after 20", 3);
   ASSERT_TRUE(fs::exists(out / "probe_checkpoint.json"));
   ASSERT_FALSE(fs::exists(out / "probes.csv"));
   const auto saved = nlohmann::json::parse(read_file(out / "probe_checkpoint.json"));
@@ -175,7 +175,7 @@ TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {
     return root_ / name;
   };
   const fs::path one = bounds("one", 0, "", 0);
-  const fs::path out = bounds("resumed", 2, "--stop-after 40", 1);
+  const fs::path out = bounds("resumed", 2, "--stop-after 40", 3);
   ASSERT_FALSE(fs::exists(out / "bounds.csv"));
   const auto saved = nlohmann::json::parse(read_file(out / "bounds_checkpoint.json"));
   int known = 0;

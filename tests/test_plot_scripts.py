@@ -290,6 +290,12 @@ class PlotScriptsTest(unittest.TestCase):
             f.write("{not json")
         self.assert_user_error(self.run_script("plot_packing.py", d), "meta.json", "JSON")
 
+    # --- plot_fig4.py
+
+    def test_fig4_without_ensemble_csv(self):
+        d = self.scratch("fig4-missing", ["meta.json"])
+        self.assert_user_error(self.run_script("plot_fig4.py", d), "no ensemble.csv in", "unjam ensemble")
+
     # --- plot_probe_field.py
 
     def test_probe_field(self):

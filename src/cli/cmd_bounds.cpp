@@ -16,10 +16,12 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "cli/shards.hpp"
 #include "unjam/campaign/distributor.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -147,6 +149,13 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
   std::printf("wrote              %s, %s\n", csv_path.string().c_str(), json_path.string().c_str());
 }
 
+// The directory of the outputs and checkpoints: DIR, or that of --out.
+std::filesystem::path output_dir(const BoundsOptions& opt) {
+  if (opt.out.empty()) return opt.dir;
+  const std::filesystem::path parent = std::filesystem::path(opt.out).parent_path();
+  return parent.empty() ? "." : parent;
+}
+
 // A finished shard: the intervals of its contacts (k mod K = i) and its counts.
 void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const ForceBounds& b,
                         const BoundsRun& run) {
@@ -156,15 +165,13 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
     fn_min.push_back(b.fn_min[k]);
     fn_max.push_back(b.fn_max[k]);
   }
-  const std::filesystem::path dir = opt.out.empty() ? std::filesystem::path(opt.dir)
-                                                    : std::filesystem::path(opt.out).parent_path();
   const nlohmann::json j = {
       {"options", {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}}},
       {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max},
       {"min_lps_skipped", b.min_lps_skipped}, {"iterations", b.iterations},
       {"loosened_solves", b.loosened_solves}, {"lp_seconds", b.seconds},
       {"busy_seconds", run.loads.at(0).busy_seconds}, {"command", command_line()}};
-  const std::filesystem::path file = dir / shard_file_name("bounds_shard", shard, shards);
+  const std::filesystem::path file = output_dir(opt) / shard_file_name("bounds_shard", shard, shards);
   write_file_atomic(file, j.dump());
   std::printf("shard %d/%d: %zu contacts -> %s (merge the shards with `unjam merge`)\n", shard,
               shards, contacts.size(), file.c_str());
@@ -172,9 +179,7 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
 
 // The checkpoint of a run (or of shard i/K): OUT's directory, bounds_checkpoint[-shard-i-of-K].json.
 std::filesystem::path checkpoint_path(const BoundsOptions& opt, int shard, int shards) {
-  const std::filesystem::path dir = opt.out.empty() ? std::filesystem::path(opt.dir)
-                                                    : std::filesystem::path(opt.out).parent_path();
-  return dir / (shards > 1 ? shard_file_name("bounds_checkpoint-shard", shard, shards) : "bounds_checkpoint.json");
+  return output_dir(opt) / (shards > 1 ? shard_file_name("bounds_checkpoint-shard", shard, shards) : "bounds_checkpoint.json");
 }
 
 // A vector with NaN (not known yet) as JSON null, and back.
@@ -190,9 +195,9 @@ Eigen::VectorXd values_of(const nlohmann::json& j) {
 }
 
 // What identifies the run a checkpoint belongs to.
-nlohmann::json checkpoint_settings(const BoundsOptions& opt, int Nc) {
-  return {{"packing", opt.dir}, {"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method},
-          {"shard", opt.shard}, {"contacts", Nc}};
+nlohmann::json checkpoint_settings(const BoundsOptions& opt, const Packing& packing, int Nc) {
+  return {{"packing", opt.dir}, {"packing_fingerprint", packing_fingerprint(packing)}, {"gap_tol", opt.gap_tol},
+          {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"shard", opt.shard}, {"contacts", Nc}};
 }
 
 // The partial result saved in `file`, if there is one (and it is of this run).
@@ -246,13 +251,15 @@ void run_bounds(const BoundsOptions& opt) {
   omp_set_num_threads(thread_count(opt.threads));
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
   const Packing packing = read_packing(opt.dir);
+  // Only the gathering rank of an MPI job writes.
+  const std::unique_ptr<DirLock> lock = dist->gathers() ? lock_output(output_dir(opt), shard, shards) : nullptr;
   const EquilibriumSystem sys =
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
   BoundsRun run;
   run.t_build = seconds_since(t_start);
   ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
   const std::filesystem::path checkpoint = checkpoint_path(opt, shard, shards);
-  const nlohmann::json settings = checkpoint_settings(opt, sys.num_contacts());
+  const nlohmann::json settings = checkpoint_settings(opt, packing, sys.num_contacts());
   std::optional<ForceBounds> resumed;
   if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, lp);
   else lp.should_stop = InterruptGuard::requested;
@@ -264,7 +271,7 @@ void run_bounds(const BoundsOptions& opt) {
   if (!dist->gathers()) return;
   if (!bounds.complete) {
     write_checkpoint(checkpoint, settings, bounds);
-    throw Error("interrupted (" + checkpoint.string() + " saved); run the same command again to resume");
+    throw Interrupted("stopped (" + checkpoint.string() + " saved); run the same command again to resume");
   }
   std::filesystem::remove(checkpoint);
   run.loads = dist->loads();
@@ -285,10 +292,12 @@ void add_bounds_command(CLI::App& app) {
                 "admissible force networks (LP)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
-  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)");
-  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0");
+  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
+      ->check(non_negative_number());
+  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
+      ->check(non_negative_number());
   cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
       ->check(CLI::IsMember({"barrier", "simplex"}));
@@ -296,10 +305,10 @@ void add_bounds_command(CLI::App& app) {
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");
   cmd->add_option("--checkpoint", opt->checkpoint_s, "seconds between checkpoints (bounds_checkpoint.json beside OUT)")
-      ->capture_default_str();
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--stop-after", opt->stop_after,
                   "stop after this many new LPs, saving the checkpoint (as Ctrl-C; rerun to resume)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->callback([opt] { run_bounds(*opt); });
 }
 

@@ -28,8 +28,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/hit_and_run.hpp"
@@ -159,6 +161,7 @@ void run_ensemble(const EnsembleOptions& given) {
   EnsembleOptions opt = given;
   opt.threads = thread_count(opt.threads);
   const Packing packing = read_packing(opt.dir);
+  const DirLock lock(opt.dir, command_line());
   const EquilibriumSystem sys =
       build_equilibrium_system(packing, select_contacts(packing, opt.gap_tol, opt.fn_tol));
   const int Nc = sys.num_contacts();
@@ -340,26 +343,30 @@ void add_ensemble_command(CLI::App& app) {
                   "to 200 contacts, else lp)")
       ->check(CLI::IsMember({"nlgs", "lp", "none"}));
   cmd->add_option("--samples", opt->samples, "networks to sample (walk: steps)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", opt->seed, "seed of both samplers");
-  cmd->add_option("--thin", opt->thin, "hit-and-run steps per sample (0: the dimension)");
+      ->check(positive_number());
+  cmd->add_option("--seed", opt->seed, "seed of both samplers")->check(seed_value());
+  cmd->add_option("--thin", opt->thin, "hit-and-run steps per sample (0: the dimension)")
+      ->check(non_negative_number());
   cmd->add_option("--burn-in", opt->burn_in,
-                  "hit-and-run steps before the first sample (0: 100 x dimension)");
+                  "hit-and-run steps before the first sample (0: 100 x dimension)")
+      ->check(non_negative_number());
   cmd->add_option("--kick", opt->kick, "walk kick amplitude in units of <F_n>")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_option("--walk-tol", opt->walk_tol, "walk relaxation residual target (F0)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--probe-g", opt->probe_g, "probe opening g (R_max)")->check(CLI::PositiveNumber);
+      ->check(positive_number());
+  cmd->add_option("--probe-g", opt->probe_g, "probe opening g (R_max)")->check(positive_number());
   cmd->add_option("--probe-dt", opt->probe_dt, "nlgs probe time step (t0)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   cmd->add_option("--probe-velocity-tol", opt->probe_velocity_tol,
                   "nlgs probe convergence: max |dU| per sweep below this times g / dt")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)");
-  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0");
+      ->check(positive_number());
+  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
+      ->check(non_negative_number());
+  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
+      ->check(non_negative_number());
   cmd->add_option("--threads", opt->threads,
                   "OpenMP threads for the LP bounds and the probes (0: all cores)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->add_flag("--write-samples", opt->write_samples,
                 "write DIR/ensemble-samples.csv (hit-and-run samples)");
   cmd->callback([opt] { run_ensemble(*opt); });

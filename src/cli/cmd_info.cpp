@@ -7,6 +7,7 @@
 #include "cli/commands.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/packing/geometry_check.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace unjam::cli {
@@ -19,7 +20,8 @@ struct InfoOptions {
   double threshold = 1e-9;  // force-carrying: fn > threshold * F0
 };
 
-void print_text(const std::string& dir, const Packing& p, const PackingStats& s, double threshold) {
+void print_text(const std::string& dir, const Packing& p, const PackingStats& s, const GeometryReport& g,
+                double threshold) {
   auto row = [](const char* label, const std::string& value) { std::printf("%-34s %s\n", label, value.c_str()); };
   auto num = [](double v) {
     char buf[32];
@@ -49,6 +51,11 @@ void print_text(const std::string& dir, const Packing& p, const PackingStats& s,
   row("tension / F0: max", num(s.max_tension));
   if (s.isostatic_excess)
     row("isostatic count N_c - (2N' - 1)", std::to_string(*s.isostatic_excess));
+  // The contact rows against the positions (packing/geometry_check.hpp).
+  row("geometry mismatch: l / n / gap", num(g.max_branch_mismatch) + " / " + num(g.max_normal_mismatch) + " / " +
+                                            num(g.max_gap_mismatch) + "  (worst " + num(g.worst_ratio) +
+                                            " x tolerance" +
+                                            (g.worst_contact ? ", contact " + std::to_string(*g.worst_contact) : "") + ")");
 }
 
 }  // namespace
@@ -64,10 +71,11 @@ void add_info_command(CLI::App& app) {
     if (!(opt->threshold >= 0.0)) throw Error("--threshold must be a non-negative number");
     const Packing p = read_packing(opt->dir);
     const PackingStats s = compute_packing_stats(p, opt->threshold);
+    const GeometryReport g = check_geometry(p);
     if (opt->json)
       std::printf("%s\n", stats_json(p, s, opt->threshold, opt->dir).dump(2).c_str());
     else
-      print_text(opt->dir, p, s, opt->threshold);
+      print_text(opt->dir, p, s, g, opt->threshold);
   });
 }
 

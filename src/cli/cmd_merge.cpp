@@ -21,6 +21,7 @@ void add_merge_command(CLI::App& app) {
   cmd->add_option("dir", o->dir, "packing directory")->required();
   cmd->add_option("--out", o->out, "directory of the shard files and the outputs (default: the packing directory)");
   cmd->callback([o] {
+    const auto lock = lock_output(o->out.empty() ? o->dir : o->out, 0, 1);  // the merged outputs' writer
     const bool probes = merge_probe_shards(o->dir, o->out);
     const bool bounds = merge_bounds_shards(o->dir, o->out);
     if (!probes && !bounds)

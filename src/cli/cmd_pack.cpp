@@ -8,8 +8,10 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "unjam/analysis/packing_stats.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/protocol/compaction.hpp"
@@ -29,6 +31,7 @@ struct PackOptions {
   std::string resume;
   int threads = 0;
   double checkpoint_s = 60.0;
+  double max_memory_gb = 0.0;  // 0: the machine's physical memory
   bool quiet = false;
   std::string command;
 };
@@ -43,9 +46,22 @@ void print_progress(const CompactionProgress& pr) {
                format_duration(pr.elapsed_s).c_str(), eta.c_str());
 }
 
+// Refuses a run whose memory estimate (protocol/compaction.hpp) exceeds --max-memory (by
+// default the machine's physical memory) before anything is allocated.
+void check_memory(const PackOptions& o, std::size_t N) {
+  const double need = static_cast<double>(estimated_memory_bytes(N));
+  const double limit = o.max_memory_gb > 0.0 ? o.max_memory_gb * 1e9 : physical_memory_bytes();
+  if (need > limit)
+    throw Error("N = " + std::to_string(N) + " needs about " + format_bytes(need) + " of memory, more than " +
+                (o.max_memory_gb > 0.0 ? "--max-memory " : "this machine's ") + format_bytes(limit) +
+                "; use fewer disks or raise --max-memory");
+  if (!o.quiet && need > 1e9) std::fprintf(stderr, "memory estimate: %s\n", format_bytes(need).c_str());
+}
+
 void run(PackOptions& o) {
   Packing p;
   std::filesystem::path out = o.out;
+  if (o.resume.empty() && o.from.empty()) check_memory(o, static_cast<std::size_t>(std::max(o.gas.N, 0)));
   if (!o.resume.empty()) {
     // Continue in place with the settings the run was started with.
     p = read_packing(o.resume);
@@ -69,6 +85,7 @@ void run(PackOptions& o) {
   prepare_compaction(p, o.compaction, o.gas, o.command);
   if (o.threads > 0) omp_set_num_threads(o.threads);
 
+  const DirLock lock(out, o.command);
   CompactionHooks hooks;
   if (!o.quiet) {
     hooks.progress = print_progress;
@@ -96,7 +113,7 @@ void run(PackOptions& o) {
                  "resume with: unjam pack --resume %s\n",
                  r.stopped ? "stopped" : "step limit reached", static_cast<long long>(r.steps),
                  out.c_str(), out.c_str());
-    if (r.stopped) throw Error("interrupted (state saved)");
+    if (r.stopped) throw Interrupted("state saved to " + out.string() + "; resume with: unjam pack --resume " + out.string());
     throw Error("no static packing within --max-steps");
   }
   const PackingStats s = compute_packing_stats(p);
@@ -129,26 +146,31 @@ void add_pack_command(CLI::App& app) {
       "pack", "compact a gas of disks into a static packing (or continue from a packing)");
   auto& d = o->compaction.dynamics;
   auto& st = o->compaction;
-  cmd->add_option("--n", o->gas.N, "number of disks (radii uniform in [0.5, 1])")->capture_default_str();
+  cmd->add_option("--n", o->gas.N, "number of disks (radii uniform in [0.5, 1]; at least 8)")->capture_default_str();
   cmd->add_option("--mu", o->mu, "Coulomb friction coefficient")->capture_default_str();
-  cmd->add_option("--seed", o->gas.seed, "seed of the random gas")->capture_default_str();
+  cmd->add_option("--seed", o->gas.seed, "seed of the random gas")->capture_default_str()->check(seed_value());
   cmd->add_option("--out", o->out, "output packing directory");
   cmd->add_option("--from", o->from, "start from this packing (re-relax at --mu / --p-ext) instead of a gas");
   cmd->add_option("--resume", o->resume, "continue a stopped compaction in place, with its settings");
   cmd->add_option("--p-ext", o->P_ext, "external pressure P_ext (pressure unit)")->capture_default_str();
   cmd->add_option("--phi-gas", o->gas.phi, "packing fraction of the initial gas")->capture_default_str();
-  cmd->add_option("--dt", d.dt, "time step (t0 = R_max sqrt(rho/P_ext) at P_ext = 1)")->capture_default_str();
-  cmd->add_option("--m-lambda", d.bath.M_lambda, "bath mass M_lambda")->capture_default_str();
-  cmd->add_option("--tol", d.nlgs.tol, "NLGS tolerance alpha of the dynamics (force-change criterion)")->capture_default_str();
-  cmd->add_option("--max-sweeps", d.nlgs.max_sweeps, "NLGS max sweeps per step of the dynamics")->capture_default_str();
-  cmd->add_option("--detect", d.min_detection, "smallest contact detection distance (R_max)")->capture_default_str();
-  cmd->add_option("--v-static", st.v_static, "try the static solve below this mean speed of loaded grains")->capture_default_str();
-  cmd->add_option("--p-static", st.p_static, "... and when |P_in/P_ext - 1| is below this")->capture_default_str();
-  cmd->add_option("--static-tol", st.final_solve.tol, "static residual target (force, torque / F0; pressure)")->capture_default_str();
-  cmd->add_option("--touch-gap", st.final_solve.touch_gap, "pairs closer than this touch in the static solve (R_max)")->capture_default_str();
-  cmd->add_option("--max-steps", st.max_steps, "give up after this many steps")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
-  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints written to --out")->capture_default_str();
+  cmd->add_option("--dt", d.dt, "time step (t0 = R_max sqrt(rho/P_ext) at P_ext = 1)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--m-lambda", d.bath.M_lambda, "bath mass M_lambda")->capture_default_str()->check(positive_number());
+  cmd->add_option("--tol", d.nlgs.tol, "NLGS tolerance alpha of the dynamics (force-change criterion)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--max-sweeps", d.nlgs.max_sweeps, "NLGS max sweeps per step of the dynamics")->capture_default_str()->check(positive_number());
+  cmd->add_option("--detect", d.min_detection, "smallest contact detection distance (R_max)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--v-static", st.v_static, "try the static solve below this mean speed of loaded grains")->capture_default_str()->check(positive_number());
+  cmd->add_option("--p-static", st.p_static, "... and when |P_in/P_ext - 1| is below this")->capture_default_str()->check(positive_number());
+  cmd->add_option("--static-tol", st.final_solve.tol, "static residual target (force, torque / F0; pressure)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--touch-gap", st.final_solve.touch_gap, "pairs closer than this touch in the static solve (R_max)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--max-steps", st.max_steps, "give up after this many steps")->capture_default_str()->check(positive_number());
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")
+      ->capture_default_str()->check(non_negative_number());
+  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints written to --out")
+      ->capture_default_str()->check(non_negative_number());
+  cmd->add_option("--max-memory", o->max_memory_gb,
+                  "refuse a run whose memory estimate exceeds this many GB (0: the physical memory)")
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
   cmd->callback([o] {
     o->command = command_line();

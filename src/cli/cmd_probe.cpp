@@ -10,11 +10,13 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "cli/shards.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/campaign/distributor.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
@@ -118,6 +120,10 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
+  if (!r.converged)
+    throw Error("the probe of contact " + std::to_string(r.contact) + " did not converge (method " + o.method +
+                ", residual " + std::to_string(r.residual) +
+                "): its F_crit and field are not a solution (nlgs: raise --max-sweeps)");
 }
 
 std::optional<FitWindow> fit_window(const ProbeOptions& o) {
@@ -127,11 +133,39 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
   return FitWindow{o.fit_window[0], o.fit_window[1]};
 }
 
+// The state an interrupted run saved, if it was made from this packing (its fingerprint) with
+// these settings. One made from another packing (or by a version that did not record it)
+// is set aside as probe_checkpoint.json.stale: its probes do not belong to this packing.
+// One with other settings is refused, as the options may be mistyped; so is a damaged one
+// (its state does not match the FNV-1a hash saved beside it).
+std::optional<CampaignState> saved_state(const fs::path& checkpoint, const std::string& fingerprint,
+                                         const nlohmann::json& settings) {
+  if (!fs::exists(checkpoint)) return std::nullopt;
+  const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
+  const auto packing = j.find("packing");
+  if (packing == j.end() || *packing != fingerprint) {
+    const fs::path stale = checkpoint.string() + ".stale";
+    rename_file(checkpoint, stale);
+    std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
+                 "starting over\n", checkpoint.c_str(), stale.c_str());
+    return std::nullopt;
+  }
+  if (j.value("settings", nlohmann::json{}) != settings)
+    throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
+  const auto state = j.find("state");
+  const auto sum = j.find("state_fnv1a64");
+  if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
+    throw Error(checkpoint.string() + " is damaged (its state does not match its checksum); remove it to start over");
+  return campaign_state_from_json(*state);
+}
+
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
                      const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
                      const fs::path& out);
-void write_shard(const ProbeOptions& o, const nlohmann::json& settings_json, const CampaignState& state,
-                 double wall, const WorkDistributor& dist, const fs::path& file);
+void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
+                 const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file);
 
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
 void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist) {
@@ -144,22 +178,23 @@ void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& di
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   fit_window(o);  // refuse a bad window before any probe runs
+  const int total = static_cast<int>(campaign_targets(p, s).size());
+  if (total == 0)
+    throw Error(o.dir + " has no force-carrying contact (fn > " + nlohmann::json(s.force_threshold).dump() +
+                " F0): nothing to probe");
   const auto [shard, shards] = o.shard.empty() ? std::pair{0, 1} : parse_shard(o.shard);
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
   if (!dist->gathers()) return run_worker(p, s, *dist);
+  const auto lock = lock_output(out, shard, shards);
   const std::string part = shards > 1 ? "-shard-" + std::to_string(shard) + "-of-" + std::to_string(shards) : "";
   const fs::path checkpoint = out / ("probe_checkpoint" + part + ".json");
   const nlohmann::json settings_json = to_json(s);
+  const std::string fingerprint = packing_fingerprint(p);
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
-  if (fs::exists(checkpoint)) {
-    const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
-    if (j.is_discarded()) throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
-    if (j.value("settings", nlohmann::json{}) != settings_json)
-      throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
-    state = campaign_state_from_json(j.at("state"));
+  if (auto saved = saved_state(checkpoint, fingerprint, settings_json)) {
+    state = std::move(*saved);
     std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
   }
-  const int total = static_cast<int>(campaign_targets(p, s).size());
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
   std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads%s\n", total,
@@ -169,7 +204,12 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   auto last_report = t0, last_checkpoint = t0;
   const std::size_t done_before = state.rows.size();
   const auto save_checkpoint = [&](const CampaignState& st) {
-    write_file_atomic(checkpoint, nlohmann::json{{"settings", settings_json}, {"state", to_json(st)}}.dump());
+    const nlohmann::json state_json = to_json(st);
+    write_file_atomic(checkpoint, nlohmann::json{{"packing", fingerprint},
+                                                 {"settings", settings_json},
+                                                 {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
+                                                 {"state", state_json}}
+                                      .dump());
   };
   CampaignHooks hooks;
   hooks.progress = [&](int done, int all) {
@@ -200,11 +240,11 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!finished) {
     save_checkpoint(state);
-    throw Error("interrupted after " + std::to_string(state.rows.size()) +
+    throw Interrupted("stopped after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
   }
   if (shards > 1)
-    write_shard(o, settings_json, state, wall, *dist, out / shard_file_name("probe_shard", shard, shards));
+    write_shard(o, fingerprint, settings_json, state, wall, *dist, out / shard_file_name("probe_shard", shard, shards));
   else
     finish_campaign(o, p, settings_json, state, wall, dist->loads(), out);
   fs::remove(checkpoint);
@@ -219,9 +259,9 @@ nlohmann::json loads_json(const std::vector<RankLoad>& loads) {
 }
 
 // A finished shard: its state, what merge needs to write the outputs, its own run.
-void write_shard(const ProbeOptions& o, const nlohmann::json& settings_json, const CampaignState& state,
-                 double wall, const WorkDistributor& dist, const fs::path& file) {
-  const nlohmann::json j = {{"settings", settings_json}, {"state", to_json(state)},
+void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
+                 const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file) {
+  const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
                             {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}}},
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
                             {"wall_seconds", wall}, {"ranks", loads_json(dist.loads())}};
@@ -301,6 +341,7 @@ void run(const ProbeOptions& o) {
     if (o.contact >= static_cast<int>(p.contacts.size()))
       throw Error("--contact " + std::to_string(o.contact) + ": the packing has " +
                   std::to_string(p.contacts.size()) + " contacts");
+    const DirLock lock(out, command_line());
     run_single(o, p, s, out);
   } else {
     run_all(o, p, s, out);
@@ -323,7 +364,10 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
   std::vector<RankLoad> loads;
   double wall = 0.0;
+  const std::string fingerprint = packing_fingerprint(p);
   for (const nlohmann::json& j : shards) {
+    if (j.value("packing", std::string()) != fingerprint)
+      throw Error("the shards in " + out.string() + " were probed on another packing than " + dir);
     if (j.at("settings") != first.at("settings") || j.at("options") != first.at("options"))
       throw Error("the shards in " + out.string() + " come from runs with other settings");
     const CampaignState part = campaign_state_from_json(j.at("state"));
@@ -346,10 +390,12 @@ void add_probe_command(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
   CLI::App* cmd = app.add_subcommand("probe", "open contacts by a tiny gap: critical force and displacement field");
   cmd->add_option("dir", o->dir, "static packing directory")->required();
-  cmd->add_option("--contact", o->contact, "probe this contact (row of contacts.csv, from 0)");
+  cmd->add_option("--contact", o->contact, "probe this contact (row of contacts.csv, from 0)")
+      ->check(non_negative_number());
   cmd->add_flag("--all", o->all, "probe every force-carrying contact");
-  cmd->add_option("--sample", o->sample, "probe a seeded random subset of this many force-carrying contacts");
-  cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str();
+  cmd->add_option("--sample", o->sample, "probe a seeded random subset of this many force-carrying contacts")
+      ->check(non_negative_number());
+  cmd->add_option("--seed", o->seed, "seed of --sample")->capture_default_str()->check(seed_value());
   cmd->add_option("--method", o->method,
                   "lp: F_crit as the LP maximum and the kinematic field at its optimum (fast); "
                   "nlgs: the paper's contact-dynamics probe (reference, slow); "
@@ -359,14 +405,17 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
-  cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str();
-  cmd->add_option("--dt", o->dt, "nlgs, lemke, cd: time step of the probe")->capture_default_str();
-  cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")->capture_default_str();
-  cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str();
+  cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str()->check(positive_number());
+  cmd->add_option("--dt", o->dt, "nlgs, lemke, cd: time step of the probe")->capture_default_str()->check(positive_number());
+  cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")
+      ->capture_default_str()->check(positive_number());
+  cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str()->check(positive_number());
   cmd->add_option("--displacement", o->displacement,
                   "displacement in the averages: peculiar, or total (with the affine part of the cell)")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")->capture_default_str();
-  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all cores); results do not depend on it")
+      ->capture_default_str()->check(non_negative_number());
+  cmd->add_option("--checkpoint", o->checkpoint_s, "seconds between checkpoints of --all / --sample")
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fit-window", o->fit_window,
                   "r_lo r_hi of the power-law fit of d(r) (R_max; default [<2R>, min(10 <2R>, L/2)])")
       ->expected(2);
@@ -376,7 +425,7 @@ void add_probe_command(CLI::App& app) {
                   "`unjam merge` joins the K shards into the outputs of one run)");
   cmd->add_option("--stop-after", o->stop_after,
                   "stop after this many new probes, saving the checkpoint (as Ctrl-C; rerun to resume)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative_number());
   cmd->callback([o] { run(*o); });
 }
 

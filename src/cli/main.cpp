@@ -21,11 +21,16 @@ int main(int argc, char** argv) {
   unjam::cli::add_ensemble_command(app);
   unjam::cli::add_merge_command(app);
   unjam::cli::add_export_command(app);
+  // Exit codes (README, "Exit codes"): 0 done, 1 error (bad input or parameters, a result
+  // that is not valid), 2 internal error, 3 interrupted with the state saved (resumable).
   int code = 0;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    code = app.exit(e);
+    code = app.exit(e) == 0 ? 0 : 1;  // --help and --version exit 0, CLI11's own codes are >= 100
+  } catch (const unjam::Interrupted& e) {
+    std::fprintf(stderr, "unjam: interrupted: %s\n", e.what());
+    code = 3;
   } catch (const unjam::Error& e) {
     std::fprintf(stderr, "unjam: error: %s\n", e.what());
     code = 1;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include <omp.h>
+#include <unistd.h>
 
 namespace unjam::cli {
 namespace {
@@ -38,6 +39,17 @@ void set_command_line(int argc, char** argv) {
 const std::string& command_line() { return g_command_line; }
 
 int thread_count(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+double physical_memory_bytes() {
+  return static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+}
+
+std::string format_bytes(double bytes) {
+  char buf[48];
+  if (bytes < 1e9) std::snprintf(buf, sizeof buf, "%.0f MB", bytes / 1e6);
+  else std::snprintf(buf, sizeof buf, "%.1f GB", bytes / 1e9);
+  return buf;
+}
 
 std::string format_duration(double s) {
   char buf[48];

@@ -11,6 +11,12 @@ const std::string& command_line();
 // Threads of a run from its --threads option: 0 means all cores (OpenMP's maximum).
 int thread_count(int requested);
 
+// The machine's physical memory (bytes).
+double physical_memory_bytes();
+
+// "512 MB", "3.2 GB", "8000 GB".
+std::string format_bytes(double bytes);
+
 // "42.0 s", "3 min 05 s", "2 h 10 min".
 std::string format_duration(double seconds);
 

@@ -3,6 +3,7 @@
 #include <map>
 #include <regex>
 
+#include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 
@@ -12,6 +13,12 @@ namespace fs = std::filesystem;
 
 std::string shard_file_name(const std::string& prefix, int shard, int shards) {
   return prefix + "-" + std::to_string(shard) + "-of-" + std::to_string(shards) + ".json";
+}
+
+std::unique_ptr<DirLock> lock_output(const fs::path& dir, int shard, int shards) {
+  const std::string name = shards > 1 ? ".unjam-shard-" + std::to_string(shard) + "-of-" + std::to_string(shards) + ".lock"
+                                      : DirLock::kFileName;
+  return std::make_unique<DirLock>(dir, command_line(), name);
 }
 
 std::vector<nlohmann::json> read_shards(const fs::path& dir, const std::string& prefix) {

@@ -5,6 +5,7 @@
 #include <unordered_set>
 
 #include "unjam/core/units.hpp"
+#include "unjam/packing/geometry_check.hpp"
 
 namespace unjam {
 
@@ -150,6 +151,7 @@ std::vector<std::pair<int, int>> missing_contacts(const Packing& packing, double
 
 nlohmann::ordered_json stats_json(const Packing& p, const PackingStats& s, double threshold,
                                   const std::string& source) {
+  const GeometryReport g = check_geometry(p);
   nlohmann::ordered_json j = {
       {"packing", source},
       {"program_version", p.meta.program_version},
@@ -178,6 +180,10 @@ nlohmann::ordered_json stats_json(const Packing& p, const PackingStats& s, doubl
       {"P_in_over_P_ext", s.pressure_ratio},
       {"max_coulomb_violation_over_F0", s.max_coulomb_violation},
       {"max_tension_over_F0", s.max_tension},
+      {"geometry_max_branch_mismatch", g.max_branch_mismatch},
+      {"geometry_max_normal_mismatch", g.max_normal_mismatch},
+      {"geometry_max_gap_mismatch", g.max_gap_mismatch},
+      {"geometry_worst_over_tolerance", g.worst_ratio},
   };
   if (s.isostatic_excess) j["isostatic_excess"] = *s.isostatic_excess;
   return j;

@@ -65,7 +65,8 @@ PackingStats compute_packing_stats(const Packing& packing, double force_threshol
 
 // The statistics as `unjam info --json` prints them (and the Python module's stats()): one
 // object with the packing's record (source directory, program version, seed, N, cell, P_ext)
-// and every field of PackingStats, forces in units of F0.
+// and every field of PackingStats, forces in units of F0, with the geometric check of the
+// contact rows (packing/geometry_check.hpp).
 nlohmann::ordered_json stats_json(const Packing& packing, const PackingStats& stats,
                                   double force_threshold_F0, const std::string& source);
 

@@ -1,6 +1,7 @@
 #pragma once
 // The one exception type of unjam: a message meant for the user (bad input, unreadable
-// file, invalid parameter). The command-line tool prints it and exits non-zero.
+// file, invalid parameter). The command-line tool prints it and exits non-zero (README,
+// "Exit codes").
 #include <stdexcept>
 #include <string>
 
@@ -9,6 +10,13 @@ namespace unjam {
 class Error : public std::runtime_error {
  public:
   explicit Error(const std::string& what) : std::runtime_error(what) {}
+};
+
+// A run stopped on request (Ctrl-C, SIGTERM) after saving its state: running the same
+// command again (or `pack --resume`) continues it. The tool exits with its own code.
+class Interrupted : public Error {
+ public:
+  explicit Interrupted(const std::string& what) : Error(what) {}
 };
 
 }  // namespace unjam

@@ -1,5 +1,6 @@
 #include "unjam/packing/csv_table.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <stdexcept>
@@ -39,6 +40,10 @@ CsvTable CsvTable::parse(std::string text, std::string name) {
   CsvTable t;
   t.name_ = std::move(name);
   t.text_ = std::move(text);
+  // A UTF-8 byte order mark (spreadsheet exports) is not part of the first column's name, and
+  // a file with CR-only line ends (classic Mac) has its lines split at them.
+  if (t.text_.rfind("\xEF\xBB\xBF", 0) == 0) t.text_.erase(0, 3);
+  if (t.text_.find('\n') == std::string::npos) std::replace(t.text_.begin(), t.text_.end(), '\r', '\n');
   const std::string& s = t.text_;
   std::vector<Span> row;
   std::size_t pos = 0, line = 0;

@@ -4,7 +4,8 @@
 // Reading: the first non-blank line is the header; columns are looked up by name, so their
 // order is free and unknown columns are ignored. Fields are separated by commas, surrounding
 // spaces and a trailing '\r' are dropped, blank lines are skipped; there is no quoting (the
-// tables hold numbers only). Every error names the file, the line and the column.
+// tables hold numbers only). A leading UTF-8 byte order mark is skipped, and CR-only line
+// ends are read as line ends. Every error names the file, the line and the column.
 //
 // Writing: doubles in the shortest form that reloads bit for bit (std::to_chars, at most 17
 // significant digits; -0.0 is written "-0"), integers exactly.

@@ -21,4 +21,17 @@ std::vector<char> Packing::loaded_grains(double fn_min) const {
 
 double Packing::force_unit() const { return unjam::force_unit(mean_radius(), meta.P_ext); }
 
+double Packing::min_cell_side() const {
+  double R1 = 0.0, R2 = 0.0;
+  for (const double R : particles.radius) {
+    if (R > R1) {
+      R2 = R1;
+      R1 = R;
+    } else if (R > R2) {
+      R2 = R;
+    }
+  }
+  return 2.0 * (R1 + R2);
+}
+
 }  // namespace unjam

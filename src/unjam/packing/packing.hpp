@@ -41,6 +41,9 @@ struct Packing {
   double mean_radius() const;
   double force_unit() const;  // F0 = 2 R_avg P_ext
   double packing_fraction() const { return particles.area() / cell.area(); }
+  // The narrowest cell side at which no pair touches through two periodic images at once
+  // (the contacts follow the minimum image): 2 (R_1 + R_2), R_1 and R_2 the two largest radii.
+  double min_cell_side() const;
   // Grains with a contact carrying fn > fn_min (simulation units); the others are rattlers.
   std::vector<char> loaded_grains(double fn_min) const;
 };

@@ -1,5 +1,6 @@
 #include "unjam/packing/packing_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -9,6 +10,7 @@
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
+#include "unjam/packing/geometry_check.hpp"
 
 namespace unjam {
 
@@ -23,18 +25,6 @@ constexpr const char* kContacts = "contacts.csv";
 
 // |n| must be 1 within this tolerance.
 constexpr double kNormalTolerance = 1e-6;
-
-// FNV-1a, 64 bit, of the bytes of a file, as 16 hex digits.
-std::string fnv1a64_hex(std::string_view bytes) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (const unsigned char c : bytes) {
-    h ^= c;
-    h *= 0x100000001b3ULL;
-  }
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
-}
 
 json checksum_of(std::string_view bytes) {
   return {{"fnv1a64", fnv1a64_hex(bytes)}, {"bytes", bytes.size()}};
@@ -75,13 +65,12 @@ struct MetaFile {
   std::optional<std::int64_t> N;  // grain count, if the meta gives it
 };
 
-MetaFile read_meta(const fs::path& path, Packing& p) {
+MetaFile read_meta(const fs::path& path, const std::string& text, Packing& p) {
   const std::string where = path.string();
-  const std::string text = read_file(path);
   MetaFile m;
   try {
     m.meta = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // a syntax error, or a number out of range
     throw Error(where + ": not valid JSON (" + e.what() + ")");
   }
   const json& meta = m.meta;
@@ -97,6 +86,12 @@ MetaFile read_meta(const fs::path& path, Packing& p) {
   if (meta.contains("Lx") || meta.contains("Ly")) {
     p.cell.Lx = meta_number(meta, where, "Lx");
     p.cell.Ly = meta_number(meta, where, "Ly");
+    if (meta.contains("L")) {
+      const double L = meta_number(meta, where, "L");
+      if (L != p.cell.Lx || L != p.cell.Ly)
+        throw Error(where + ": 'L' = " + json(L).dump() + " disagrees with 'Lx' = " + json(p.cell.Lx).dump() +
+                    ", 'Ly' = " + json(p.cell.Ly).dump() + " (L is written only for a square cell)");
+    }
   } else if (meta.contains("L")) {
     p.cell.Lx = p.cell.Ly = meta_number(meta, where, "L");
   } else {
@@ -131,15 +126,22 @@ MetaFile read_meta(const fs::path& path, Packing& p) {
   return m;
 }
 
-// Compares a table's bytes with the checksum meta.json recorded for it, if any.
-void verify_checksum(const json& meta, const fs::path& dir, const char* file, std::string_view bytes) {
+// The checksum meta.json records for a table, or null if meta.json has no "checksums" at
+// all. Present, it must hold both tables in the form write_packing gives it.
+const json* recorded_checksum(const json& meta, const std::string& where, const char* file) {
   const auto all = meta.find("checksums");
-  if (all == meta.end()) return;
-  const auto it = all->find(file);
-  if (it == all->end()) return;
-  if (*it != checksum_of(bytes))
-    throw Error((dir / file).string() +
-                " does not match meta.json: the packing was modified or its write was interrupted");
+  if (all == meta.end()) return nullptr;
+  const auto it = all->is_object() ? all->find(file) : all->end();
+  if (it == all->end() || !it->is_object() || !it->contains("fnv1a64") || !(*it)["fnv1a64"].is_string() ||
+      !it->contains("bytes") || !(*it)["bytes"].is_number_unsigned())
+    throw Error(where + ": 'checksums' must give {\"fnv1a64\": \"<16 hex digits>\", \"bytes\": <size>} for " + file +
+                " (delete the whole 'checksums' entry to read edited tables)");
+  return &*it;
+}
+
+bool matches_checksum(const json& meta, const std::string& where, const char* file, std::string_view bytes) {
+  const json* sum = recorded_checksum(meta, where, file);
+  return sum == nullptr || *sum == checksum_of(bytes);
 }
 
 // ---- particles.csv -----------------------------------------------------------------------
@@ -212,44 +214,164 @@ void read_contacts(const CsvTable& t, Packing& p) {
   }
 }
 
-}  // namespace
+// ---- the files of one write ---------------------------------------------------------------
 
-Packing read_packing(const fs::path& dir) {
+// write_packing writes the three files as *.new, then renames them into place, meta.json
+// last. A write stopped before meta.json.new is complete leaves the previous files intact;
+// one stopped while renaming leaves meta.json.new with its tables, each renamed or still
+// *.new. Either way one complete version, matching its checksums, is on disk.
+constexpr const char* kNew = ".new";
+
+fs::path new_name(const fs::path& dir, const char* file) { return dir / (std::string(file) + kNew); }
+
+struct PackingFiles {
+  fs::path meta_path, particles_path, contacts_path;
+  std::string meta_text, particles_text, contacts_text;
+};
+
+// The version a write stopped while renaming left (meta.json.new and the tables that match
+// its checksums), if there is one.
+std::optional<PackingFiles> pending_write(const fs::path& dir) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error("packing directory " + dir.string() + " does not exist");
-  for (const char* file : {kMeta, kParticles, kContacts})
-    if (!fs::exists(dir / file, ec)) throw Error("packing " + dir.string() + ": missing " + file);
-
-  Packing p;
-  const MetaFile meta = read_meta(dir / kMeta, p);
-
-  std::string particles_text = read_file(dir / kParticles);
-  verify_checksum(meta.meta, dir, kParticles, particles_text);
-  const CsvTable particles = CsvTable::parse(std::move(particles_text), (dir / kParticles).string());
-  if (meta.N && *meta.N != static_cast<std::int64_t>(particles.rows()))
-    throw Error((dir / kMeta).string() + ": N = " + std::to_string(*meta.N) + " but " + kParticles + " has " +
-                std::to_string(particles.rows()) + " rows");
-  read_particles(particles, p);
-
-  std::string contacts_text = read_file(dir / kContacts);
-  verify_checksum(meta.meta, dir, kContacts, contacts_text);
-  read_contacts(CsvTable::parse(std::move(contacts_text), (dir / kContacts).string()), p);
-  return p;
+  PackingFiles f;
+  f.meta_path = new_name(dir, kMeta);
+  if (!fs::exists(f.meta_path, ec)) return std::nullopt;
+  try {
+    f.meta_text = read_file(f.meta_path);
+    const json meta = json::parse(f.meta_text, nullptr, false);
+    if (!meta.is_object() || !meta.contains("checksums")) return std::nullopt;
+    const std::pair<const char*, std::pair<fs::path*, std::string*>> tables[] = {
+        {kParticles, {&f.particles_path, &f.particles_text}}, {kContacts, {&f.contacts_path, &f.contacts_text}}};
+    for (const auto& [file, out] : tables) {
+      for (const fs::path& candidate : {new_name(dir, file), dir / file}) {
+        if (!fs::exists(candidate, ec)) continue;
+        std::string text = read_file(candidate);
+        if (matches_checksum(meta, f.meta_path.string(), file, text)) {
+          *out.first = candidate;
+          *out.second = std::move(text);
+          break;
+        }
+      }
+      if (out.first->empty()) return std::nullopt;
+    }
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+  return f;
 }
 
-void write_packing(const fs::path& dir, const Packing& p) {
+// Completes a write that stopped while renaming, or removes the *.new files of one that
+// stopped before (the previous version is then intact).
+void finish_or_discard_pending_write(const fs::path& dir) {
+  if (const auto f = pending_write(dir)) {
+    for (const fs::path* path : {&f->particles_path, &f->contacts_path, &f->meta_path})
+      if (path->extension() == kNew) rename_file(*path, dir / path->stem());
+    sync_directory(dir);
+    return;
+  }
+  std::error_code ec;
+  for (const char* file : {kMeta, kParticles, kContacts}) fs::remove(new_name(dir, file), ec);
+}
+
+std::string particles_csv(const Packing& p) {
   const Particles& P = p.particles;
   CsvWriter particles({"id", "x", "y", "radius", "vx", "vy", "omega"});
   for (std::size_t i = 0; i < p.size(); ++i) {
     particles.cell(static_cast<std::int64_t>(i)).cell(P.x[i]).cell(P.y[i]).cell(P.radius[i]);
     particles.cell(P.vx[i]).cell(P.vy[i]).cell(P.omega[i]).end_row();
   }
+  return particles.str();
+}
+
+std::string contacts_csv(const Packing& p) {
   CsvWriter contacts({"a", "b", "nx", "ny", "lx", "ly", "gap", "fn", "ft"});
   for (const Contact& c : p.contacts) {
     contacts.cell(c.a).cell(c.b).cell(c.n.x()).cell(c.n.y()).cell(c.l.x()).cell(c.l.y());
     contacts.cell(c.gap).cell(c.fn).cell(c.ft).end_row();
   }
+  return contacts.str();
+}
 
+// The grains' area over the cell's: above 1 no arrangement of the disks fits the cell; and
+// the cell must be wide enough for the minimum image (Packing::min_cell_side).
+void check_packing_fraction(const Packing& p, const fs::path& meta_path) {
+  const double phi = p.packing_fraction();
+  if (!(phi <= 1.0)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  ": the grains' area is %.4g times the cell's (Lx x Ly = %.6g x %.6g); the cell is too "
+                  "small for its grains or a radius is wrong", phi, p.cell.Lx, p.cell.Ly);
+    throw Error(meta_path.string() + buf);
+  }
+  if (std::min(p.cell.Lx, p.cell.Ly) < p.min_cell_side()) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  ": the cell (%.6g x %.6g) is narrower than 2 (R_1 + R_2) = %.6g, R_1 and R_2 the two "
+                  "largest radii: a pair would touch through two periodic images",
+                  p.cell.Lx, p.cell.Ly, p.min_cell_side());
+    throw Error(meta_path.string() + buf);
+  }
+}
+
+void check_contact_geometry(const Packing& p, const CsvTable& contacts) {
+  const GeometryReport g = check_geometry(p);
+  if (g.duplicate)
+    contacts.fail(g.duplicate->second, "grains " + std::to_string(p.contacts[g.duplicate->second].a) + " and " +
+                                           std::to_string(p.contacts[g.duplicate->second].b) +
+                                           " are listed twice (also on line " +
+                                           std::to_string(contacts.line(g.duplicate->first)) + ")");
+  if (!g.ok()) {
+    const Contact& c = p.contacts[*g.worst_contact];
+    contacts.fail(*g.worst_contact, "contact " + std::to_string(*g.worst_contact) + " (grains " + std::to_string(c.a) +
+                                        "-" + std::to_string(c.b) + ") does not fit the positions and the cell: " +
+                                        g.worst_what);
+  }
+}
+
+}  // namespace
+
+Packing read_packing(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) throw Error("packing directory " + dir.string() + " does not exist");
+  if (!fs::is_directory(dir, ec))
+    throw Error(dir.string() + " is a file, not a packing directory (a directory with meta.json, " +
+                kParticles + ", " + kContacts + ")");
+  PackingFiles f;
+  if (auto pending = pending_write(dir)) {
+    f = std::move(*pending);
+  } else {
+    for (const char* file : {kMeta, kParticles, kContacts})
+      if (!fs::exists(dir / file, ec)) throw Error("packing " + dir.string() + ": missing " + file);
+    f.meta_path = dir / kMeta;
+    f.particles_path = dir / kParticles;
+    f.contacts_path = dir / kContacts;
+    f.meta_text = read_file(f.meta_path);
+    f.particles_text = read_file(f.particles_path);
+    f.contacts_text = read_file(f.contacts_path);
+  }
+
+  Packing p;
+  const MetaFile meta = read_meta(f.meta_path, f.meta_text, p);
+  for (const auto& [file, text] : {std::pair{kParticles, &f.particles_text}, std::pair{kContacts, &f.contacts_text}})
+    if (!matches_checksum(meta.meta, f.meta_path.string(), file, *text))
+      throw Error((dir / file).string() +
+                  " does not match meta.json: the packing was modified or its write was interrupted");
+
+  const CsvTable particles = CsvTable::parse(std::move(f.particles_text), (dir / kParticles).string());
+  if (meta.N && *meta.N != static_cast<std::int64_t>(particles.rows()))
+    throw Error((dir / kMeta).string() + ": N = " + std::to_string(*meta.N) + " but " + kParticles + " has " +
+                std::to_string(particles.rows()) + " rows");
+  read_particles(particles, p);
+  check_packing_fraction(p, dir / kMeta);
+
+  const CsvTable contacts = CsvTable::parse(std::move(f.contacts_text), (dir / kContacts).string());
+  read_contacts(contacts, p);
+  check_contact_geometry(p, contacts);
+  return p;
+}
+
+void write_packing(const fs::path& dir, const Packing& p) {
+  const std::string particles = particles_csv(p), contacts = contacts_csv(p);
   nlohmann::ordered_json meta;  // keys in the order of docs/packing-format.md
   meta["format_version"] = kPackingFormatVersion;
   meta["program_version"] = kVersion;
@@ -267,13 +389,25 @@ void write_packing(const fs::path& dir, const Packing& p) {
                    {"step", p.state.step},
                    {"lambda", p.state.lambda},
                    {"static", p.state.is_static}};
-  meta["checksums"] = {{kParticles, checksum_of(particles.str())}, {kContacts, checksum_of(contacts.str())}};
+  meta["checksums"] = {{kParticles, checksum_of(particles)}, {kContacts, checksum_of(contacts)}};
 
-  // Tables first, meta.json last: a write interrupted in between leaves checksums that no
-  // longer match, which read_packing reports.
-  write_file_atomic(dir / kParticles, particles.str());
-  write_file_atomic(dir / kContacts, contacts.str());
-  write_file_atomic(dir / kMeta, meta.dump(2) + "\n");
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error("cannot create directory " + dir.string() + ": " + ec.message());
+  finish_or_discard_pending_write(dir);
+  remove_stale_temporaries(dir);
+  // Every file as *.new first, meta.json.new last; then renamed into place, meta.json last.
+  write_file_atomic(new_name(dir, kParticles), particles);
+  write_file_atomic(new_name(dir, kContacts), contacts);
+  write_file_atomic(new_name(dir, kMeta), meta.dump(2) + "\n");
+  for (const char* file : {kParticles, kContacts, kMeta}) rename_file(new_name(dir, file), dir / file);
+  sync_directory(dir);
+}
+
+std::string packing_fingerprint(const Packing& p) {
+  char cell[64];
+  std::snprintf(cell, sizeof cell, "%.17g %.17g\n", p.cell.Lx, p.cell.Ly);
+  return fnv1a64_hex(cell + particles_csv(p) + contacts_csv(p));
 }
 
 }  // namespace unjam

@@ -6,6 +6,7 @@
 //   contacts.csv    a,b,nx,ny,lx,ly,gap,fn,ft
 // Numbers are written with 17 significant digits, so a packing reloads bit for bit.
 #include <filesystem>
+#include <string>
 
 #include "unjam/packing/packing.hpp"
 
@@ -15,11 +16,18 @@ inline constexpr int kPackingFormatVersion = 1;
 
 // Reads and validates a packing; throws unjam::Error with a message naming the file, the
 // line and the problem (missing file or column, truncated row, non-numeric or NaN value,
-// index out of range, checksum mismatch).
+// index out of range, checksum mismatch, grains that do not fit the cell, contact rows that
+// do not fit the positions: packing/geometry_check.hpp).
 Packing read_packing(const std::filesystem::path& dir);
 
-// Writes the packing into `dir` (created if needed). Every file is written atomically and
-// meta.json last, with checksums of the tables, so a reader detects an interrupted write.
+// Writes the packing into `dir` (created if needed), replacing the previous version as a
+// whole: a write stopped at any point leaves one complete version on disk, the previous or
+// the new one, which read_packing finds (docs/packing-format.md). Temporary files left by
+// stopped processes are removed.
 void write_packing(const std::filesystem::path& dir, const Packing& packing);
+
+// A hash (16 hex digits) of the cell, the grains and the contacts as write_packing writes
+// them: outputs computed from a packing record it to tell whether they belong to it.
+std::string packing_fingerprint(const Packing& packing);
 
 }  // namespace unjam

@@ -196,7 +196,12 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   std::vector<int> todo;
   if (distributor.gathers()) {
     std::vector<char> listed(p.contacts.size(), 0);
-    for (const ProbeRow& r : state.rows) listed[r.contact] = 1;
+    for (const ProbeRow& r : state.rows) {
+      if (r.contact < 0 || r.contact >= static_cast<int>(p.contacts.size()))
+        throw Error("the saved probes list contact " + std::to_string(r.contact) + ", but the packing has " +
+                    std::to_string(p.contacts.size()) + " contacts");
+      listed[r.contact] = 1;
+    }
     for (const int k : all)
       if (!state.average.has_probe(k) && !listed[k]) todo.push_back(k);
   }

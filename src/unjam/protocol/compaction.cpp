@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <vector>
 
@@ -19,9 +20,9 @@ double seconds_since(Clock::time_point t0) {
 }  // namespace
 
 void validate(const CompactionSettings& s, double mu) {
-  if (!(mu >= 0.0) || !std::isfinite(mu)) throw Error("friction coefficient mu must be >= 0");
+  if (!(mu >= 0.0) || !std::isfinite(mu)) throw Error("friction coefficient mu must be a finite number >= 0");
   const auto& d = s.dynamics;
-  if (!(d.bath.P_ext > 0.0) || !std::isfinite(d.bath.P_ext)) throw Error("P_ext must be > 0");
+  if (!(d.bath.P_ext > 0.0) || !std::isfinite(d.bath.P_ext)) throw Error("P_ext must be a finite number > 0");
   if (!(d.bath.M_lambda > 0.0)) throw Error("the bath mass M_lambda must be > 0");
   if (!(d.dt > 0.0)) throw Error("the time step dt must be > 0");
   if (!(d.nlgs.tol > 0.0)) throw Error("the NLGS tolerance must be > 0");
@@ -30,6 +31,8 @@ void validate(const CompactionSettings& s, double mu) {
   if (!(s.final_solve.tol > 0.0)) throw Error("the static residual tolerance must be > 0");
   if (!(s.v_static > 0.0)) throw Error("the static velocity threshold must be > 0");
 }
+
+std::size_t estimated_memory_bytes(std::size_t N) { return 16'000'000 + 8'000 * N; }
 
 double mean_speed_of_loaded_grains(const Packing& p) {
   const std::vector<char> loaded = p.loaded_grains(0.0);
@@ -57,6 +60,7 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
   // ETA from the decay of log(v_mean) between progress reports.
   double last_log_v = NAN, last_report_s = 0.0;
 
+  const double min_side = p.min_cell_side();
   p.state.is_static = false;
   while (res.steps < s.max_steps) {
     if (hooks.should_stop && hooks.should_stop()) {
@@ -64,6 +68,15 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
       break;
     }
     const StepReport rep = advance(p, s.dynamics);
+    if (std::min(p.cell.Lx, p.cell.Ly) < min_side) {
+      char buf[240];
+      std::snprintf(buf, sizeof buf,
+                    "the cell shrank to %.4g x %.4g, below 2 (R_1 + R_2) = %.4g, where a pair touches "
+                    "through two periodic images: %zu disks are too few to jam in a periodic cell "
+                    "(step %lld); use more", p.cell.Lx, p.cell.Ly, min_side, p.size(),
+                    static_cast<long long>(p.state.step));
+      throw Error(buf);
+    }
     ++res.steps;
     res.sweeps += rep.sweeps;
     res.contact_updates += static_cast<std::int64_t>(rep.sweeps) * rep.num_contacts;

@@ -9,10 +9,19 @@
 
 namespace unjam {
 
+int min_jamming_grains(const GasSettings& s) {
+  const double phi_max = M_PI / std::sqrt(12.0);
+  const double mean_R2 = (s.R_min * s.R_min + s.R_min * s.R_max + s.R_max * s.R_max) / 3.0;  // uniform R
+  return static_cast<int>(std::ceil(16.0 * s.R_max * s.R_max * phi_max / (M_PI * mean_R2)));
+}
+
 Packing make_gas(const GasSettings& s) {
-  if (s.N < 2) throw Error("the number of disks must be at least 2 (got " + std::to_string(s.N) + ")");
   if (!(s.R_min > 0.0) || !(s.R_max >= s.R_min))
     throw Error("radii must satisfy 0 < R_min <= R_max");
+  if (s.N < min_jamming_grains(s))
+    throw Error("the number of disks must be at least " + std::to_string(min_jamming_grains(s)) + " (got " +
+                std::to_string(s.N) + "): fewer cannot jam in a periodic cell, whose side would have to "
+                "shrink below 4 R_max, where a pair touches through two periodic images");
   // Random sequential placement jams near phi ~ 0.55; above 0.45 it may not finish.
   if (!(s.phi > 0.0) || s.phi > 0.45)
     throw Error("the gas packing fraction must be in (0, 0.45] (got " + std::to_string(s.phi) + ")");

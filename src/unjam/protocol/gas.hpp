@@ -16,8 +16,14 @@ struct GasSettings {
   std::uint64_t seed = 1;
 };
 
-// Throws unjam::Error for invalid settings (N < 2, radii not 0 < R_min <= R_max,
-// phi outside (0, 0.45]).
+// The fewest disks that can jam in a periodic cell: even at the densest packing of disks,
+// phi_max = pi / sqrt(12), fewer would need a cell narrower than 4 R_max, where a pair
+// touches through two periodic images (Packing::min_cell_side). With <R^2> the mean square
+// radius: N_min = ceil(16 R_max^2 phi_max / (pi <R^2>)), 8 for radii in [0.5, 1].
+int min_jamming_grains(const GasSettings& settings);
+
+// Throws unjam::Error for invalid settings (N < min_jamming_grains, radii not
+// 0 < R_min <= R_max, phi outside (0, 0.45]).
 Packing make_gas(const GasSettings& settings);
 
 }  // namespace unjam

@@ -1,0 +1,14 @@
+#pragma once
+// Checks of option values shared by the subcommands, applied by CLI11 to the text given on
+// the command line, before it is converted: a seed is an unsigned decimal integer (no sign,
+// at most 2^64 - 1: a negative one would wrap round), a count or duration is a finite number
+// >= 0, a tolerance or step a finite number > 0 (never nan or inf).
+#include <CLI/CLI.hpp>
+
+namespace unjam::cli {
+
+CLI::Validator seed_value();            // 0 .. 18446744073709551615
+CLI::Validator non_negative_number();   // finite, >= 0
+CLI::Validator positive_number();       // finite, > 0
+
+}  // namespace unjam::cli

@@ -1,0 +1,268 @@
+// The tool end to end under the failures a user meets: a checkpoint left by another packing,
+// a run killed during a write, two writers on one directory, impossible or out-of-range
+// parameters, and the exit codes of README ("Exit codes").
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_run.hpp"
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/packing/packing_io.hpp"
+
+namespace unjam {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_tool;
+using testing::ToolRun;
+
+
+// A fresh directory under the temp dir, removed at the end of the test.
+class CliReliability : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("unjam-cli-rel-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "-" +
+             std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+
+  // A writable copy of a fixture packing.
+  fs::path copy(const std::string& fixture, const std::string& as) { return testing::copy_fixture(fixture, root_, as); }
+
+  fs::path root_;
+};
+
+// Starts `unjam ARGS` in the background (output discarded); returns its process id.
+pid_t spawn(const std::string& args) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", (std::string("exec '") + UNJAM_BINARY + "' " + args + " >/dev/null 2>&1").c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
+}
+
+int rows_of(const fs::path& csv) {
+  std::ifstream in(csv);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty();
+  return n - 1;  // without the header
+}
+
+// A checkpoint of `probe DIR --all`, as saved after a probe (the run is killed then).
+std::string checkpoint_of(const fs::path& dir) {
+  const fs::path ckpt = dir / "probe_checkpoint.json";
+  const pid_t pid = spawn("probe " + dir.string() + " --all --checkpoint 0 --threads 1 --quiet");
+  std::string saved;
+  for (int i = 0; i < 20000 && saved.empty(); ++i) {  // written after each probe, removed at the end
+    if (fs::exists(ckpt)) {
+      try {
+        saved = read_file(ckpt);
+      } catch (const Error&) {
+      }
+    }
+    if (saved.empty()) std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, nullptr, 0);
+  fs::remove(ckpt);
+  return saved;
+}
+
+TEST_F(CliReliability, ProbeCheckpointOfAnotherPackingIsSetAside) {
+  // A checkpoint of packing A (probes of A's contacts), then packing B in the same directory:
+  // `probe --all` used to resume A's probes on B and merge the two.
+  const fs::path a = copy("p50-mu0.1", "a"), b = copy("p50-mu1", "b");
+  const std::string saved = checkpoint_of(a);
+  ASSERT_FALSE(saved.empty()) << "no checkpoint seen";
+  write_file_atomic(b / "probe_checkpoint.json", saved);
+
+  const ToolRun r = run_tool("probe " + b.string() + " --all --threads 1 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("saved from another packing"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(b / "probe_checkpoint.json.stale"));
+  const auto summary = nlohmann::json::parse(read_file(b / "probe_summary.json"));
+  // B's own run from scratch gives the same count.
+  const fs::path b2 = copy("p50-mu1", "b2");
+  ASSERT_EQ(run_tool("probe " + b2.string() + " --all --threads 1 --quiet").exit_code, 0);
+  const auto fresh = nlohmann::json::parse(read_file(b2 / "probe_summary.json"));
+  EXPECT_EQ(summary.at("probes"), fresh.at("probes"));
+  EXPECT_EQ(rows_of(b / "probes.csv"), fresh.at("probes").get<int>());
+  EXPECT_EQ(read_file(b / "response_profile.csv"), read_file(b2 / "response_profile.csv"));
+}
+
+TEST_F(CliReliability, DamagedProbeCheckpointsAreRefusedOrSetAside) {
+  // Seeded random byte damage of a real checkpoint: every run either refuses it (exit 1, a
+  // message) or starts over and gives the undamaged result; never a crash or a merge.
+  const fs::path a = copy("p50-mu0.1", "a"), ref = copy("p50-mu0.1", "ref");
+  const std::string saved = checkpoint_of(a);
+  ASSERT_FALSE(saved.empty()) << "no checkpoint seen";
+  ASSERT_EQ(run_tool("probe " + ref.string() + " --all --threads 1 --quiet").exit_code, 0);
+  const std::string reference = read_file(ref / "response_profile.csv");
+  std::mt19937_64 rng(16);
+  int refused = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    std::string damaged = saved;
+    const std::size_t at = std::uniform_int_distribution<std::size_t>(0, damaged.size() - 1)(rng);
+    switch (trial % 3) {
+      case 0: damaged[at] = static_cast<char>(std::uniform_int_distribution<int>(32, 126)(rng)); break;
+      case 1: damaged.erase(at, 1); break;
+      default: damaged.resize(at); break;
+    }
+    if (damaged == saved) continue;
+    fs::remove(a / "probe_checkpoint.json.stale");
+    write_file_atomic(a / "probe_checkpoint.json", damaged);
+    const ToolRun r = run_tool("probe " + a.string() + " --all --threads 1 --quiet");
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", byte " + std::to_string(at));
+    ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+    if (r.exit_code == 1) {
+      ++refused;
+      EXPECT_NE(r.output.find("unjam: error: "), std::string::npos) << r.output;
+      EXPECT_NE(r.output.find("remove it to start over"), std::string::npos) << r.output;
+    } else {
+      EXPECT_EQ(read_file(a / "response_profile.csv"), reference);
+    }
+  }
+  EXPECT_GT(refused, 12);
+}
+
+TEST_F(CliReliability, ASecondWriterIsRefusedNamingTheFirst) {
+  const fs::path d = copy("p50-mu0.1", "d");
+  {
+    const DirLock held(d, "unjam probe held-by-the-test");
+    const ToolRun r = run_tool("probe " + d.string() + " --contact 1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("is in use by process " + std::to_string(::getpid()) + " (unjam probe held-by-the-test)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(d / "probe-1.csv"));
+    const ToolRun bounds = run_tool("bounds " + d.string());
+    EXPECT_EQ(bounds.exit_code, 1) << bounds.output;
+    EXPECT_NE(bounds.output.find("is in use by process"), std::string::npos) << bounds.output;
+  }
+  // Released (also when a holder is killed: the kernel drops a dead process's flock).
+  const ToolRun r = run_tool("probe " + d.string() + " --contact 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(d / "probe-1.csv"));
+}
+
+TEST_F(CliReliability, PackKilledDuringCheckpointsResumes) {
+  // SIGKILL at seeded random times while checkpoints are written every millisecond: the
+  // directory always holds one complete version, and --resume finishes it.
+  const fs::path s = root_ / "s";
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> delay_ms(150, 900);
+  for (int kill = 0; kill < 6; ++kill) {
+    const pid_t pid = spawn("pack --n 200 --mu 0.1 --seed 5 --threads 1 --checkpoint 0.001 --quiet --out " +
+                            s.string() + (kill == 0 ? "" : " --resume " + s.string()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    if (!fs::exists(s / "meta.json") && !fs::exists(s / "meta.json.new")) continue;  // killed before any write
+    const ToolRun info = run_tool("info " + s.string());
+    ASSERT_EQ(info.exit_code, 0) << "after kill " << kill << ":\n" << info.output;
+  }
+  const ToolRun r = run_tool("pack --resume " + s.string() + " --threads 1 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(read_packing(s).state.is_static);
+  for (const auto& e : fs::directory_iterator(s)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp."), std::string::npos) << name;
+    EXPECT_EQ(name.find(".new"), std::string::npos) << name;
+  }
+}
+
+TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingRuns) {
+  const fs::path out = root_ / "out";
+  const fs::path fixture = copy("p50-mu1", "fixture");
+  const struct {
+    std::string args, phrase;
+  } cases[] = {
+      {"pack --n 2 --out " + out.string(), "the number of disks must be at least 8 (got 2)"},
+      {"pack --n 4 --out " + out.string(), "fewer cannot jam in a periodic cell"},
+      {"pack --n 1000000000 --out " + out.string(), "N = 1000000000 needs about 8000.0 GB"},
+      {"pack --n 2000 --max-memory 0.01 --out " + out.string(), "more than --max-memory 10 MB"},
+      {"pack --n 20 --seed -3 --out " + out.string(), "a seed is an integer from 0 to 18446744073709551615, got '-3'"},
+      {"pack --n 20 --seed 18446744073709551616 --out " + out.string(), "a seed is an integer"},
+      {"pack --n 20 --threads -1 --out " + out.string(), "must be a finite number >= 0, got '-1'"},
+      {"pack --n 20 --checkpoint -1 --out " + out.string(), "must be a finite number >= 0"},
+      {"pack --n 20 --mu inf --out " + out.string(), "mu must be a finite number >= 0"},
+      {"pack --n 20 --dt nan --out " + out.string(), "must be a finite number > 0, got 'nan'"},
+      {"probe " + fixture.string() + " --contact -1 --out " + out.string(), "must be a finite number >= 0"},
+      {"probe " + fixture.string() + " --contact 1 --g nan --out " + out.string(), "must be a finite number > 0"},
+      {"probe " + fixture.string() + " --contact 1 --dt inf --out " + out.string(), "must be a finite number > 0"},
+      {"probe " + fixture.string() + " --sample 3 --seed -1 --out " + out.string(), "a seed is an integer"},
+      {"ensemble " + fixture.string() + " --thin -1", "must be a finite number >= 0"},
+      {"ensemble " + fixture.string() + " --burn-in -1", "must be a finite number >= 0"},
+      {"ensemble " + fixture.string() + " --probe-g nan", "must be a finite number > 0"},
+      {"ensemble " + fixture.string() + " --seed -1", "a seed is an integer"},
+      {"ensemble " + fixture.string() + " --samples 0", "must be a finite number > 0"},
+      {"bounds " + fixture.string() + " --gap-tol nan --out " + (out / "b.csv").string(), "must be a finite number >= 0"},
+  };
+  for (const auto& c : cases) {
+    const ToolRun r = run_tool(c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.phrase), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_LT(r.output.size(), 400u) << "a short message: " << r.output;
+    EXPECT_FALSE(fs::exists(out)) << "nothing written for " << c.args;
+  }
+  for (const char* file : {"ensemble.csv", "probes.csv", "bounds.csv", ".unjam.lock"})
+    EXPECT_FALSE(fs::exists(fixture / file)) << file;
+}
+
+TEST_F(CliReliability, ExitCodesOfEverySubcommand) {
+  const fs::path d = copy("p50-mu1", "d");
+  EXPECT_EQ(run_tool("--help").exit_code, 0);
+  EXPECT_EQ(run_tool("probe --help").exit_code, 0);
+  EXPECT_EQ(run_tool("--version").exit_code, 0);
+  EXPECT_EQ(run_tool("").exit_code, 1) << "no subcommand";
+  EXPECT_EQ(run_tool("frobnicate").exit_code, 1);
+  EXPECT_EQ(run_tool("pack --bogus").exit_code, 1);
+  for (const char* cmd : {"info", "probe", "bounds", "ensemble"}) {
+    const ToolRun missing = run_tool(std::string(cmd) + " " + (root_ / "missing").string() + " --all");
+    EXPECT_EQ(missing.exit_code, 1) << cmd << ": " << missing.output;
+  }
+  // A file given for a packing directory.
+  const ToolRun file = run_tool("info " + (d / "meta.json").string());
+  EXPECT_EQ(file.exit_code, 1) << file.output;
+  EXPECT_NE(file.output.find("is a file, not a packing directory"), std::string::npos) << file.output;
+  // An nlgs probe that did not converge is not a result.
+  const ToolRun nlgs = run_tool("probe " + d.string() + " --contact 1 --method nlgs --max-sweeps 5");
+  EXPECT_EQ(nlgs.exit_code, 1) << nlgs.output;
+  EXPECT_NE(nlgs.output.find("did not converge"), std::string::npos) << nlgs.output;
+}
+
+TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {
+  const fs::path d = copy("p50-mu1", "d");
+  // Every contact without force: no force-carrying contact.
+  auto meta = nlohmann::json::parse(read_file(d / "meta.json"));
+  std::string contacts = read_file(d / "contacts.csv");
+  const auto header_end = contacts.find('\n');
+  write_file_atomic(d / "contacts.csv", contacts.substr(0, header_end + 1));
+  meta.erase("checksums");
+  write_file_atomic(d / "meta.json", meta.dump());
+  const ToolRun r = run_tool("probe " + d.string() + " --all --quiet");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no force-carrying contact"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(d / "probe_summary.json"));
+}
+
+}  // namespace
+}  // namespace unjam
