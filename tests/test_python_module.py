@@ -131,9 +131,10 @@ def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
 
 
 def help_defaults(command):
-    """{option: default} from `unjam COMMAND --help` (CLI11 prints "--n INT=500")."""
+    """{option: default} from `unjam COMMAND --help` (CLI11 prints "--n INT=500", and with a
+    check of the value "--threads INT:NUMBER >= 0=0")."""
     out = tool(command, "--help")
-    return {m[1]: m[2] for m in re.finditer(r"--([\w-]+) \w+=(\S+)", out)}
+    return {m[1]: m[2] for m in re.finditer(r"--([\w-]+) \w+(?::[^\n]*?)?=(\S+)(?=\s|$)", out)}
 
 
 def signature_defaults(function):
