@@ -147,6 +147,51 @@ TEST(CdPath, AgreesWithLemkeWhereTheStepHasOneSolution) {
   }
 }
 
+TEST(CdPath, UpdatedFactorsFollowTheSamePathAsFreshOnes) {
+  // p50-mu0.1, every loaded contact: the path with S's factors updated by the rows that
+  // change (Woodbury, the default) and the path with S factorised afresh at every piece
+  // reach the same step: F_crit to 1e-6 and every force to 1e-5 F0. Where the path passes
+  // a near-degenerate point (several conditions tight within round-off) the two may take
+  // it in another order, so the number of pieces is compared on most probes, not all.
+  const Packing& p = fixture("p50-mu0.1");
+  CdPathSettings fresh;
+  fresh.max_updated_rows = 0;
+  int compared = 0, same_pieces = 0;
+  for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k) {
+    if (!(p.contacts[k].fn > 0.0)) continue;
+    CdPathStats su, sf;
+    const CdStepSolution updated = probe_cd_path(p, k, ProbeSettings{}, CdPathSettings{}, &su);
+    const CdStepSolution afresh = probe_cd_path(p, k, ProbeSettings{}, fresh, &sf);
+    ASSERT_TRUE(updated.result.converged) << "contact " << k;
+    ASSERT_TRUE(afresh.result.converged) << "contact " << k;
+    EXPECT_NEAR(updated.result.f_crit / afresh.result.f_crit, 1.0, 1e-6) << "contact " << k;
+    EXPECT_LT((updated.f - afresh.f).lpNorm<Eigen::Infinity>(), 1e-5 * p.force_unit()) << "contact " << k;
+    EXPECT_LT(su.factorizations, sf.factorizations) << "contact " << k;
+    same_pieces += su.pieces == sf.pieces;
+    ++compared;
+  }
+  EXPECT_GT(compared, 50);
+  EXPECT_GE(same_pieces, compared * 3 / 4);
+}
+
+TEST(CdPath, ProximalStepsRemoveTheCompliancesDisplacement) {
+  // The path carries a compliance (1e-7 g per F0 of force change); at lambda = 1 proximal
+  // steps move its reference forces to the solution, which leaves the rigid step: on the
+  // reference contacts of p50-mu1 the residual falls from ~1e-7 g to round-off (~1e-11 g).
+  const Packing& p = fixture("p50-mu1");
+  CdPathSettings none;
+  none.refinements = 0;
+  for (const auto& [k, f_ref] : cd_reference()) {
+    CdPathStats stats;
+    const CdStepSolution refined = probe_cd_path(p, k, ProbeSettings{}, CdPathSettings{}, &stats);
+    const CdStepSolution compliant = probe_cd_path(p, k, ProbeSettings{}, none);
+    EXPECT_GT(compliant.residual.max(), 1e-9) << "contact " << k;
+    EXPECT_LT(refined.residual.max(), 1e-10) << "contact " << k;
+    EXPECT_GE(stats.refinements, 1);
+    EXPECT_NEAR(refined.result.f_crit / f_ref, 1.0, 1e-6) << "contact " << k;
+  }
+}
+
 TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {
   // A path that needs more pieces than allowed says so (no F_crit, residual kNoSolution)
   // instead of returning the forces where it stopped.

@@ -9,6 +9,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include <Eigen/LU>
 #include <Eigen/Sparse>
 
 #include <klu.h>
@@ -89,9 +90,9 @@ struct Event {
 // pressure row and column as its border. S is diagonally dominant where K had zero pivots.
 class StepPath {
  public:
-  StepPath(const CdStepProblem& pb, const Eigen::VectorXd& f0, double kappa)
-      : pb_(pb), n_(static_cast<int>(pb.system.A.rows())), nc_(pb.num_contacts()),
-        mu_(pb.system.mu), dt2_(pb.dt * pb.dt), kappa_(kappa), f0_(f0), fref_(f0),
+  StepPath(const CdStepProblem& pb, const Eigen::VectorXd& f0, double kappa, int max_updated_rows)
+      : max_updated_rows_(static_cast<std::size_t>(std::max(0, max_updated_rows))), pb_(pb), n_(static_cast<int>(pb.system.A.rows())), nc_(pb.num_contacts()),
+        mu_(pb.system.mu), dt2_(pb.dt * pb.dt), kappa_(kappa), fref0_(f0),
         state_(nc_, State::kOpen) {
     w_ = pb.inverse_mass.head(n_ - 1).mean();
     // g_eff(lambda): the probed pair's opening grows from 0 to g; a touching pair without
@@ -106,17 +107,34 @@ class StepPath {
         gap0_[k] = 1e-9 * pb.g * (1.0 + static_cast<double>(k) / nc_);
         gap1_[k] = -gap0_[k];
       }
-    Af0_ = pb.system.A * f0_;
+    fref1_ = Eigen::VectorXd::Zero(2 * nc_);
+    load0_ = pb.system.A * f0;
+    load1_ = pb.system.rhs - load0_;
     const Eigen::SparseMatrix<double>& A = pb.system.A;
     Eigen::SparseMatrix<double> A_G = A.topRows(n_ - 1);
     Eigen::VectorXd minv_G = pb.inverse_mass.head(n_ - 1);
     W_ = Eigen::SparseMatrix<double>(A_G.transpose()) * minv_G.asDiagonal() * A_G;
     a_p_ = Eigen::VectorXd(A.row(n_ - 1).transpose());
+    Z_.resize(2 * nc_ + 1, static_cast<Eigen::Index>(max_updated_rows_));
+    D_.resize(max_updated_rows_);
   }
 
   const std::vector<State>& states() const { return state_; }
   void start(const std::vector<State>& states) { state_ = states; }
-  void scale_compliance(double factor) { kappa_ *= factor; }
+
+  // Turns the path into one step of a proximal iteration at lambda = 1 (the opening and the
+  // load held at their final values): the reference forces move from the present ones to f
+  // (a solution at the present reference) as the path parameter goes from 0 to 1. A solution
+  // at fref = f has no compliance displacement, kappa (f - fref) = 0: the rigid step. The
+  // states of f satisfy their conditions at 0, and the path follows their changes to 1.
+  void proximal_step(const Eigen::VectorXd& f) {
+    gap0_ += gap1_;
+    gap1_.setZero();
+    load0_ += load1_;
+    load1_.setZero();
+    fref0_ += fref1_;
+    fref1_ = f - fref0_;
+  }
 
   // Assembles and factorises the reduced system S of the current states. Its pattern does
   // not depend on the states (inactive entries are stored as zeros), so it is analysed once.
@@ -143,27 +161,61 @@ class StepPath {
     S_.resize(2 * nc_ + 1, 2 * nc_ + 1);
     S_.setFromTriplets(t.begin(), t.end());
     S_.makeCompressed();
+    base_state_ = state_;
+    S_abs_ = S_.cwiseAbs();
+    slot_.assign(2 * nc_, -1);
+    rows_.clear();
+    ++stats_factorizations_;
     return lu_.factorize(S_, reuse_pivots_);
   }
 
-  // Contact k takes state s; K is factorised afresh (a low-rank update of the previous
-  // factors loses accuracy on the nearly singular K of a hyperstatic sticking set).
+  // Contact k takes state s. That changes S in contact k's two rows only, so S = S_b + E D^T
+  // with S_b the last factorised matrix, E the unit columns of the rows changed since and
+  // D^T their changes, and (Woodbury)
+  //     S^-1 y = z - Z C^-1 D^T z,   z = S_b^-1 y,   Z = S_b^-1 E,   C = I + D^T Z.
+  // S is factorised afresh once max_updated_rows rows have changed or C is nearly singular.
   bool set_state(int k, State s) {
     state_[k] = s;
-    return factorize();
+    if (rows_.size() + 2 > max_updated_rows_) return factorize();
+    for (const int r : {2 * k, 2 * k + 1}) {
+      if (slot_[r] >= 0) continue;
+      slot_[r] = static_cast<int>(rows_.size());
+      rows_.push_back(r);
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(S_.rows());
+      e[r] = 1.0;
+      Z_.col(slot_[r]) = lu_.solve(e);
+    }
+    for (const int r : {2 * k, 2 * k + 1}) {
+      std::vector<std::pair<int, double>>& d = D_[slot_[r]];
+      d.clear();
+      row_entries(r, state_[k], 1.0, d);
+      row_entries(r, base_state_[k], -1.0, d);
+    }
+    const int m = static_cast<int>(rows_.size());
+    Eigen::MatrixXd C = Eigen::MatrixXd::Identity(m, m);
+    for (int i = 0; i < m; ++i)
+      for (const auto& [col, v] : D_[i]) C.row(i) += v * Z_.row(col).head(m);
+    capacitance_.compute(C);
+    if (!(capacitance_.rcond() > kMinCapacitanceRcond)) return factorize();
+    return true;
   }
 
+  int factorizations() const { return stats_factorizations_; }
+
   // x(lambda) = x0 + lambda x1 of the current states.
-  void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) const {
+  void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) {
     Eigen::VectorXd r0 = Eigen::VectorXd::Zero(n_ + 2 * nc_), r1 = r0;
-    r0.head(n_) = -Af0_;
-    r1.head(n_) = -(pb_.system.rhs - Af0_);
+    r0.head(n_) = -load0_;
+    r1.head(n_) = -load1_;
     for (int k = 0; k < nc_; ++k) {
       const int rn = n_ + 2 * k, rt = rn + 1;
       if (!closed(state_[k])) continue;
-      r0[rn] = -gap0_[k] / dt2_ + kappa_ * fref_[2 * k];
-      r1[rn] = -gap1_[k] / dt2_;
-      if (state_[k] == State::kStick) r0[rt] = kappa_ * fref_[2 * k + 1];
+      r0[rn] = -gap0_[k] / dt2_ + kappa_ * fref0_[2 * k];
+      r1[rn] = -gap1_[k] / dt2_ + kappa_ * fref1_[2 * k];
+      if (state_[k] == State::kStick) {
+        r0[rt] = kappa_ * fref0_[2 * k + 1];
+        r1[rt] = kappa_ * fref1_[2 * k + 1];
+      }
     }
     x0 = solve_full(r0);
     x1 = solve_full(r1);
@@ -177,7 +229,7 @@ class StepPath {
 
   // Compliant slip c_t of open contact k (ft = 0) at lambda on the current piece.
   double slip(int k, double lambda) const {
-    return u0_[2 * k + 1] + lambda * u1_[2 * k + 1] - kappa_ * fref_[2 * k + 1];
+    return u0_[2 * k + 1] + lambda * u1_[2 * k + 1] - kappa_ * (fref0_[2 * k + 1] + lambda * fref1_[2 * k + 1]);
   }
 
   // Calls fn(a, b, scale, next) for every function a + lambda b >= 0 that contact k's
@@ -191,7 +243,8 @@ class StepPath {
     switch (state_[k]) {
       case State::kOpen:
         // compliant closing displacement c_n = u_n / dt^2 + kappa (fn - fref_n), fn = 0
-        fn(u0_[2 * k] + gap0_[k] / dt2_ - kappa_ * fref_[2 * k], u1_[2 * k] + gap1_[k] / dt2_, u_scale,
+        fn(u0_[2 * k] + gap0_[k] / dt2_ - kappa_ * fref0_[2 * k],
+           u1_[2 * k] + gap1_[k] / dt2_ - kappa_ * fref1_[2 * k], u_scale,
            mu_ > 0.0 ? State::kStick : State::kFrictionless);
         break;
       case State::kStick:
@@ -204,7 +257,8 @@ class StepPath {
         const double s = slip_sign(state_[k]);
         fn(fn0, fn1, f_scale, State::kOpen);
         // compliant slip c_t = u_t / dt^2 + kappa (ft - fref_t) keeps the sign s
-        fn(s * (u0_[2 * k + 1] + kappa_ * (ft0 - fref_[2 * k + 1])), s * (u1_[2 * k + 1] + kappa_ * ft1),
+        fn(s * (u0_[2 * k + 1] + kappa_ * (ft0 - fref0_[2 * k + 1])),
+           s * (u1_[2 * k + 1] + kappa_ * (ft1 - fref1_[2 * k + 1])),
            u_scale, State::kStick);
         break;
       }
@@ -248,15 +302,76 @@ class StepPath {
 
  private:
   // Row r of the force unknowns (fn_k at 2k, ft_k at 2k + 1) holds a kinematic condition.
-  bool active(int r) const {
-    const State s = state_[r / 2];
-    return r % 2 == 0 ? closed(s) : s == State::kStick;
+  static bool active_in(int r, State s) { return r % 2 == 0 ? closed(s) : s == State::kStick; }
+  bool active(int r) const { return active_in(r, state_[r / 2]); }
+
+  // Appends sign x the entries (column, value) of row r of S with contact r / 2 in state s
+  // (as factorize() assembles it; a column may appear twice, the values then add).
+  void row_entries(int r, State s, double sign, std::vector<std::pair<int, double>>& out) const {
+    if (active_in(r, s))
+      for (Eigen::SparseMatrix<double>::InnerIterator it(W_, r); it; ++it)  // W is symmetric
+        out.emplace_back(static_cast<int>(it.row()), sign * it.value());
+    if (r % 2 == 0) {
+      out.emplace_back(r, sign * (closed(s) ? kappa_ : w_));
+    } else {
+      out.emplace_back(r, sign * (s == State::kStick ? kappa_ : w_));
+      out.emplace_back(r - 1, sign * slip_sign(s) * mu_ * w_);
+    }
+    if (a_p_[r] != 0.0 && active_in(r, s)) out.emplace_back(2 * nc_, sign * a_p_[r]);
+  }
+
+  // S^-1 y by the factors of S_b and the rows changed since (see set_state), with one step
+  // of iterative refinement where the componentwise backward error
+  //     omega = max_i |S z - y|_i / (|S| |z| + |y|)_i
+  // exceeds kMaxBackwardError; where it still does, S is factorised afresh and solved again.
+  Eigen::VectorXd solve_reduced(const Eigen::VectorXd& y) {
+    Eigen::VectorXd z = updated_solve(y);
+    if (rows_.empty()) return z;
+    for (int refinement = 0; refinement < 2; ++refinement) {
+      const auto [r, omega] = backward_error(y, z);
+      if (omega <= kMaxBackwardError) return z;
+      if (refinement == 0) z += updated_solve(r);
+    }
+    if (!factorize()) return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
+    return lu_.solve(y);
+  }
+
+  // z = S^-1 y by Woodbury's formula on the factors of S_b.
+  Eigen::VectorXd updated_solve(const Eigen::VectorXd& y) const {
+    Eigen::VectorXd z = lu_.solve(y);
+    const int m = static_cast<int>(rows_.size());
+    if (m == 0) return z;
+    Eigen::VectorXd t = Eigen::VectorXd::Zero(m);
+    for (int i = 0; i < m; ++i)
+      for (const auto& [col, v] : D_[i]) t[i] += v * z[col];
+    z.noalias() -= Z_.leftCols(m) * capacitance_.solve(t);
+    return z;
+  }
+
+  // The residual y - S z and omega (see solve_reduced).
+  std::pair<Eigen::VectorXd, double> backward_error(const Eigen::VectorXd& y, const Eigen::VectorXd& z) const {
+    Eigen::VectorXd r = y - S_ * z;
+    Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cwiseAbs();
+    for (std::size_t i = 0; i < rows_.size(); ++i) {
+      double sum = 0.0, abs_sum = 0.0;
+      for (const auto& [col, v] : D_[i]) sum += v * z[col];
+      r[rows_[i]] -= sum;
+      // |S| of a changed row: its entries in the present state (D holds the present entries
+      // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
+      for (const auto& [col, v] : D_[i]) abs_sum += std::abs(v * z[col]);
+      scale[rows_[i]] += abs_sum;
+    }
+    double omega = 0.0;
+    for (Eigen::Index i = 0; i < r.size(); ++i)
+      if (scale[i] > 0.0) omega = std::max(omega, std::abs(r[i]) / scale[i]);
+      else if (r[i] != 0.0) omega = std::numeric_limits<double>::infinity();
+    return {r, omega};
   }
 
   // The full system K x = r, x = (v, f), by the reduced one: v_G = M_G^-1 (r_G + A_G f),
   // so a kinematic row a_r^T v + (D f)_r = r_r reads (a_r^T M_G^-1 A_G + D) f + a_pr v_p =
   // r_r - a_r^T M_G^-1 r_G, and the pressure row m_p v_p - a_p^T f = r_p stays as it is.
-  Eigen::VectorXd solve_full(const Eigen::VectorXd& r) const {
+  Eigen::VectorXd solve_full(const Eigen::VectorXd& r) {
     const int p = n_ - 1;
     Eigen::VectorXd t = pb_.inverse_mass.cwiseProduct(r.head(n_));
     t[p] = 0.0;
@@ -264,7 +379,7 @@ class StepPath {
     Eigen::VectorXd y(2 * nc_ + 1);
     for (int i = 0; i < 2 * nc_; ++i) y[i] = r[n_ + i] - (active(i) ? At[i] : 0.0);
     y[2 * nc_] = r[p];
-    y = lu_.solve(y);
+    y = solve_reduced(y);
     Eigen::VectorXd x(n_ + 2 * nc_);
     x.tail(2 * nc_) = y.head(2 * nc_);
     x.head(n_) = pb_.inverse_mass.cwiseProduct(r.head(n_) + pb_.system.A * y.head(2 * nc_));
@@ -272,17 +387,31 @@ class StepPath {
     return x;
   }
 
+  std::size_t max_updated_rows_;
   const CdStepProblem& pb_;
   int n_, nc_;
   double mu_, dt2_, kappa_, w_ = 1.0;
-  Eigen::VectorXd f0_, fref_, Af0_, u0_, u1_;
-  Eigen::VectorXd gap0_, gap1_;  // g_eff(lambda) = gap0 + lambda gap1
+  Eigen::VectorXd u0_, u1_;
+  // The path's data, linear in its parameter lambda: g_eff = gap0 + lambda gap1, the load
+  // on the balance rows load0 + lambda load1, the compliance's reference fref0 + lambda fref1.
+  Eigen::VectorXd gap0_, gap1_, load0_, load1_, fref0_, fref1_;
   std::vector<State> state_;
   Eigen::SparseMatrix<double> W_;  // A_G^T M_G^-1 A_G: the Delassus operator of the grains
   Eigen::VectorXd a_p_;            // the pressure row of A
-  Eigen::SparseMatrix<double> S_;
+  Eigen::SparseMatrix<double> S_;  // S_b: the matrix last factorised
   mutable Klu lu_;
   bool reuse_pivots_ = true;
+  // The rows changed since S_b (see set_state): their slots, Z = S_b^-1 E, D^T, C's LU.
+  static constexpr double kMinCapacitanceRcond = 1e-10;
+  std::vector<State> base_state_;
+  std::vector<int> slot_;
+  std::vector<int> rows_;
+  Eigen::MatrixXd Z_;
+  std::vector<std::vector<std::pair<int, double>>> D_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> capacitance_;
+  int stats_factorizations_ = 0;
+  Eigen::SparseMatrix<double> S_abs_;  // |S_b|, entrywise
+  static constexpr double kMaxBackwardError = 1e-14;
 };
 
 // A 64-bit hash of the state set and the direction (collisions: ~pieces^2 / 2^64).
@@ -294,50 +423,27 @@ std::size_t state_key(const std::vector<State>& states, double sigma) {
 }
 
 
-// One path at compliance `compliance` (CdPathSettings::compliance); f empty where it fails.
-CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
-                      double compliance, CdPathStats& stats) {
-  const int nc = pb.num_contacts(), contact = pb.probed;
-  const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
-  // The static network, its tangential forces drawn into the cone's interior by distinct
-  // relative amounts ~1e-9: a contact at the cone's edge (fully mobilised) starts sticking
-  // and its event happens at its own lambda, so that no two events tie at lambda = 0. The
-  // path starts from that network's own balance A f0 (the balance rows' lambda term).
-  Eigen::VectorXd f0 = packing_forces(packing, pb.system);
-  for (int k = 0; k < nc; ++k) f0[2 * k + 1] *= 1.0 - 1e-9 * (1.0 + static_cast<double>(k) / nc);
-  StepPath path(pb, f0, compliance * pb.g / (dt2 * F0));
-
-  // The static network: loaded pairs closed (sticking), every other pair open.
-  std::vector<State> start(nc, State::kOpen);
-  for (int k = 0; k < nc; ++k)
-    if ((f0[2 * k] > 0.0 && pb.g_eff[k] <= 0.0) || k == contact)
-      start[k] = pb.system.mu > 0.0 ? State::kStick : State::kFrictionless;
-  path.start(start);
-
-  const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * nc + 1000;
-  // Follows the path; sigma = -1 where it turns back in lambda (a fold: the step has
-  // several solutions there, as the dynamics from rest would pass them by).
-  Eigen::VectorXd x0, x1;
+// Follows the path from a solution at lambda = 0 (the current states, x0 and x1 solved) to
+// lambda = 1 by parametric principal pivoting; false where it fails (stats.failure says why).
+bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& ps, Eigen::VectorXd& x0,
+                 Eigen::VectorXd& x1, CdPathStats& stats) {
+  const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * pb.num_contacts() + 1000;
+  // sigma = -1 where the path turns back in lambda (a fold: the step has several solutions
+  // there, as the dynamics from rest would pass them by).
   double lambda = 0.0, sigma = 1.0;
   std::unordered_set<std::size_t> visited;
-  bool ok = path.factorize();
-  if (ok) {
-    path.solve(x0, x1);
-    path.displacements(x0, x1);
-  }
-  while (ok) {
+  while (true) {
     const Event e = path.next_event(x0, x1, lambda, sigma);
     if (e.contact < 0 && sigma < 0.0) {  // a ray: no solution on this path
-      ok = false;
       stats.failure = "ray";
+      return false;
     }
-    if (e.contact < 0 || (sigma > 0.0 && e.lambda >= 1.0) || !ok) break;
+    if (e.contact < 0 || (sigma > 0.0 && e.lambda >= 1.0)) return true;
     // A path through a degenerate point (several conditions tight at once) can come back
     // to a state set it has left: the pivoting cycles, and the probe has no solution here.
     if (++stats.pieces > max_pieces || !visited.insert(state_key(path.states(), sigma)).second) {
-      ok = false;
       stats.failure = stats.pieces > max_pieces ? "pieces" : "cycle";
-      break;
+      return false;
     }
     if (e.lambda == lambda) ++stats.degenerate;
     lambda = e.lambda;
@@ -349,32 +455,67 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     State next = e.next;
     if (previous == State::kOpen && pb.system.mu > 0.0)
       next = path.slip(e.contact, lambda) >= 0.0 ? State::kSlidePlus : State::kSlideMinus;
-    ok = path.set_state(e.contact, next);
-    if (!ok) break;
+    if (!path.set_state(e.contact, next)) {
+      stats.failure = "singular";
+      return false;
+    }
     path.solve(x0, x1);
     path.displacements(x0, x1);
     if (sigma * path.freed_slope(e.contact, previous, x0, x1) < 0.0) sigma = -sigma;
   }
+}
+
+// The step at compliance `compliance` (CdPathSettings::compliance); f empty where it fails.
+CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
+                      double compliance, CdPathStats& stats) {
+  const int nc = pb.num_contacts(), contact = pb.probed;
+  const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
+  // The static network, its tangential forces drawn into the cone's interior by distinct
+  // relative amounts ~1e-9: a contact at the cone's edge (fully mobilised) starts sticking
+  // and its event happens at its own lambda, so that no two events tie at lambda = 0. The
+  // path starts from that network's own balance A f0 (the balance rows' lambda term).
+  Eigen::VectorXd f0 = packing_forces(packing, pb.system);
+  for (int k = 0; k < nc; ++k) f0[2 * k + 1] *= 1.0 - 1e-9 * (1.0 + static_cast<double>(k) / nc);
+  StepPath path(pb, f0, compliance * pb.g / (dt2 * F0), ps.max_updated_rows);
+
+  // The static network: loaded pairs closed (sticking), every other pair open.
+  std::vector<State> start(nc, State::kOpen);
+  for (int k = 0; k < nc; ++k)
+    if ((f0[2 * k] > 0.0 && pb.g_eff[k] <= 0.0) || k == contact)
+      start[k] = pb.system.mu > 0.0 ? State::kStick : State::kFrictionless;
+  path.start(start);
 
   CdStepSolution sol;
-  if (!ok && stats.failure.empty()) stats.failure = "singular";
-  if (!ok) return sol;
-  // lambda = 1 on the last piece; the compliance's own displacements (kappa dt^2 |f - f0|,
-  // ~ compliance g) are then removed by solving the last state's system again with kappa
-  // ten times smaller, while that lowers the step's residual.
+  Eigen::VectorXd x0, x1;
+  if (!path.factorize()) {
+    stats.failure = "singular";
+    return sol;
+  }
+  path.solve(x0, x1);
+  path.displacements(x0, x1);
+  if (!follow_path(path, pb, ps, x0, x1, stats)) return sol;
+
+  // lambda = 1. The compliance's own displacements (kappa dt^2 |f - f0|, ~ compliance g)
+  // are removed by proximal steps: the reference forces move to the solution, along a path
+  // of their own (StepPath::proximal_step), while that lowers the step's residual.
   sol.f = path.forces(x0 + x1);
   sol.residual = cd_step_residual(pb, sol.f);
   for (int r = 0; r < ps.refinements && sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
-    path.scale_compliance(0.1);
-    if (!path.factorize()) break;
+    path.proximal_step(sol.f);
     path.solve(x0, x1);
+    path.displacements(x0, x1);
+    ++stats.refinements;
+    CdPathStats proximal;
+    if (!follow_path(path, pb, ps, x0, x1, proximal)) break;
+    stats.pieces += proximal.pieces;
+    stats.degenerate += proximal.degenerate;
     const Eigen::VectorXd f = path.forces(x0 + x1);
     const CdStepResidual res = cd_step_residual(pb, f);
-    ++stats.refinements;
     if (!(res.max() < sol.residual.max())) break;
     sol.f = f;
     sol.residual = res;
   }
+  stats.factorizations += path.factorizations();
   for (int k = 0; k < nc; ++k) {
     const State s = path.states()[k];
     if (s == State::kOpen && k != contact) ++stats.open;

@@ -38,7 +38,8 @@ namespace unjam {
 struct CdPathSettings {
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
-  int refinements = 4;        // solves at lambda = 1 with kappa / 10, / 100, ...
+  int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
+  int max_updated_rows = 48;  // rows of S changed before it is factorised afresh (0: every piece)
   bool retry = true;          // where not exact: again at 10 x and 0.1 x the compliance
 };
 
@@ -46,6 +47,7 @@ struct CdPathStats {
   int pieces = 0;             // linear pieces of the path (state changes)
   int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
   int refinements = 0;
+  int factorizations = 0;     // of the reduced system (the others are updates of its factors)
   int attempts = 0;           // paths followed (1 + retries)
   int open = 0, sliding = 0;  // final states (the probed contact not counted as open)
   std::string failure;        // why there is no solution: "ray", "cycle", "pieces",
