@@ -493,7 +493,10 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   }
   path.solve(x0, x1);
   path.displacements(x0, x1);
-  if (!follow_path(path, pb, ps, x0, x1, stats)) return sol;
+  if (!follow_path(path, pb, ps, x0, x1, stats)) {
+    stats.factorizations += path.factorizations();
+    return sol;
+  }
 
   // lambda = 1. The compliance's own displacements (kappa dt^2 |f - f0|, ~ compliance g)
   // are removed by proximal steps: the reference forces move to the solution, along a path
