@@ -1,7 +1,8 @@
 // `unjam ensemble` end to end on the fixture p50-mu0.1: the LP intervals in ensemble.csv
 // against the fixture's independent ones (HiGHS, bounds-reference.csv), both samplers' ranges
 // inside them, F_crit of the LP probe equal to fn_max on every force-carrying contact, and
-// ensemble.json against ensemble.csv; a fixed seed gives the same bytes.
+// ensemble.json against ensemble.csv (and its command line); a fixed seed gives the same
+// bytes; --help of ensemble and bounds gives the defaults.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -65,6 +66,8 @@ TEST_F(CliEnsemble, LpIntervalsSampledRangesAndCriticalForces) {
   }
   EXPECT_EQ(probed, 81);
 
+  EXPECT_NE(j["command"].get<std::string>().find("ensemble " + dir_.string() + " --samples 300"),
+            std::string::npos) << "ensemble.json records the command line";
   EXPECT_EQ(j["contacts_used"].get<std::size_t>(), t.rows());
   EXPECT_DOUBLE_EQ(j["F0"].get<double>(), F0);
   EXPECT_EQ(j["samples"].get<int>(), 300);
@@ -102,6 +105,24 @@ TEST_F(CliEnsemble, OneSamplerWithoutProbesWritesOnlyItsColumns) {
   EXPECT_FALSE(j["methods"].contains("walk"));
   EXPECT_EQ(j["probe"]["method"], "none");
   EXPECT_FALSE(j["probe"].contains("contacts_probed"));
+}
+
+// --help gives every option's default (CLI11 prints it after the type: "--samples INT=20000").
+TEST(CliHelp, BoundsAndEnsembleShowTheirDefaults) {
+  const testing::ToolRun e = run_tool("ensemble --help");
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  for (const char* d : {"--method TEXT:{hit-and-run,walk,both}=both", "--samples INT:NUMBER > 0=20000",
+                        "--seed UINT:SEED=1", "--thin INT:NUMBER >= 0=0", "--burn-in INT:NUMBER >= 0=0",
+                        "--kick FLOAT:NUMBER >= 0=1", "--walk-tol FLOAT:NUMBER > 0=1e-10",
+                        "--probe-g FLOAT:NUMBER > 0=1e-09", "--probe-dt FLOAT:NUMBER > 0=0.001",
+                        "--probe-velocity-tol FLOAT:NUMBER > 0=1e-06", "--gap-tol FLOAT:NUMBER >= 0=1e-09",
+                        "--fn-tol FLOAT:NUMBER >= 0=1e-09", "--threads INT:NUMBER >= 0=0"})
+    EXPECT_NE(e.output.find(d), std::string::npos) << d << " in\n" << e.output;
+  const testing::ToolRun b = run_tool("bounds --help");
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  for (const char* d : {"--gap-tol FLOAT:NUMBER >= 0=1e-09", "--fn-tol FLOAT:NUMBER >= 0=1e-09",
+                        "--threads INT:NUMBER >= 0=0", "--method TEXT:{barrier,simplex}=barrier"})
+    EXPECT_NE(b.output.find(d), std::string::npos) << d << " in\n" << b.output;
 }
 
 }  // namespace

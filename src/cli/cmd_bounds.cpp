@@ -293,14 +293,14 @@ void add_bounds_command(CLI::App& app) {
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
   cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
       ->check(non_negative_number())
       ->capture_default_str();
-  cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
-      ->check(CLI::IsMember({"barrier", "simplex"}));
+  cmd->add_option("--method", opt->method, "LP method: barrier or simplex")
+      ->capture_default_str()->check(CLI::IsMember({"barrier", "simplex"}));
   cmd->add_option("--shard", opt->shard,
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");

@@ -13,7 +13,7 @@
 //                      none; f_crit and the rest are empty for a contact without force
 //                      (fn <= fn-tol F0), f_crit_method is "nlgs" or "lp";
 //   DIR/ensemble.json  eta and coverage of the LP widths per method, F_crit / fn_max
-//                      statistics, settings, timings, version;
+//                      statistics, settings, timings, version, command line;
 //   DIR/ensemble-samples.csv with --write-samples (hit-and-run samples: fn of every contact).
 #include <algorithm>
 #include <chrono>
@@ -297,6 +297,7 @@ void run_ensemble(const EnsembleOptions& given) {
   const double total = seconds_since(t_start);
   const nlohmann::ordered_json j = {
       {"program_version", kVersion},
+      {"command", command_line()},
       {"packing", opt.dir},
       {"mu", sys.mu},
       {"F0", sys.F0},
@@ -336,37 +337,37 @@ void add_ensemble_command(CLI::App& app) {
       "ensemble", "admissible force networks: hit-and-run and/or the paper's random walk, LP "
                   "intervals, eta and F_crit per contact (Fig. 4)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
-  cmd->add_option("--method", opt->method, "sampler: hit-and-run, walk or both (default)")
-      ->check(CLI::IsMember({"hit-and-run", "walk", "both"}));
+  cmd->add_option("--method", opt->method, "sampler: hit-and-run, walk or both")
+      ->capture_default_str()->check(CLI::IsMember({"hit-and-run", "walk", "both"}));
   cmd->add_option("--probe", opt->probe,
                   "F_crit of every force-carrying contact: nlgs, lp or none (default: nlgs up "
                   "to 200 contacts, else lp)")
       ->check(CLI::IsMember({"nlgs", "lp", "none"}));
   cmd->add_option("--samples", opt->samples, "networks to sample (walk: steps)")
-      ->check(positive_number());
-  cmd->add_option("--seed", opt->seed, "seed of both samplers")->check(seed_value());
+      ->capture_default_str()->check(positive_number());
+  cmd->add_option("--seed", opt->seed, "seed of both samplers")->capture_default_str()->check(seed_value());
   cmd->add_option("--thin", opt->thin, "hit-and-run steps per sample (0: the dimension)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--burn-in", opt->burn_in,
                   "hit-and-run steps before the first sample (0: 100 x dimension)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--kick", opt->kick, "walk kick amplitude in units of <F_n>")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--walk-tol", opt->walk_tol, "walk relaxation residual target (F0)")
-      ->check(positive_number());
-  cmd->add_option("--probe-g", opt->probe_g, "probe opening g (R_max)")->check(positive_number());
+      ->capture_default_str()->check(positive_number());
+  cmd->add_option("--probe-g", opt->probe_g, "probe opening g (R_max)")->capture_default_str()->check(positive_number());
   cmd->add_option("--probe-dt", opt->probe_dt, "nlgs probe time step (t0)")
-      ->check(positive_number());
+      ->capture_default_str()->check(positive_number());
   cmd->add_option("--probe-velocity-tol", opt->probe_velocity_tol,
                   "nlgs probe convergence: max |dU| per sweep below this times g / dt")
-      ->check(positive_number());
+      ->capture_default_str()->check(positive_number());
   cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--threads", opt->threads,
                   "OpenMP threads for the LP bounds and the probes (0: all cores)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_flag("--write-samples", opt->write_samples,
                 "write DIR/ensemble-samples.csv (hit-and-run samples)");
   cmd->callback([opt] { run_ensemble(*opt); });
