@@ -29,6 +29,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+import sweep_table  # noqa: E402
 import unjam_plot as up  # noqa: E402
 
 import matplotlib.pyplot as plt  # noqa: E402
@@ -36,9 +37,8 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator  # noqa: E402
 
-COLUMNS = ["mu", "N", "seed", "phi", "z", "F_cont_over_F0", "F_crit_over_F_cont", "alpha",
-           "alpha_err"]
-RESULTS = ["phi", "z", "F_cont_over_F0", "F_crit_over_F_cont", "alpha", "alpha_err"]
+COLUMNS = sweep_table.COLUMNS
+RESULTS = sweep_table.RESULTS
 
 
 def parse_args(argv=None):
@@ -67,29 +67,20 @@ def read_table(path):
 
 
 def aggregate(t):
-    """{N: {"mu": [...], "<col>": mean, "<col>_std": std over seeds, "n": count}}."""
+    """{N: {"mu": [...], "<col>": mean, "<col>_std": std over seeds, "n": count}} from the
+    shared aggregation (sweep_table.aggregate); alpha_std is alpha's error bar there."""
+    rows = [{c: t[c][i] for c in COLUMNS} for i in range(len(t["mu"]))]
+    groups = sweep_table.aggregate(rows)
     series = {}
-    for N in np.unique(t["N"]):
-        rows_N = t["N"] == N
-        mus = np.unique(np.round(t["mu"][rows_N], 12))
-        s = {"mu": mus, "n": np.zeros(len(mus), dtype=int)}
+    for N in sorted({n for _, n in groups}):
+        keys = [k for k in groups if k[1] == N]
+        s = {"mu": np.array([mu for mu, _ in keys]),
+             "n": np.array([groups[k]["seeds"] for k in keys], dtype=int)}
         for c in RESULTS:
-            s[c] = np.full(len(mus), np.nan)
-            s[c + "_std"] = np.full(len(mus), np.nan)
-        for j, mu in enumerate(mus):
-            sel = rows_N & (np.round(t["mu"], 12) == mu)
-            s["n"][j] = np.count_nonzero(sel)
-            for c in RESULTS:
-                v = t[c][sel]
-                v = v[np.isfinite(v)]
-                if len(v):
-                    s[c][j] = np.mean(v)
-                    s[c + "_std"][j] = np.std(v, ddof=1) if len(v) > 1 else 0.0
-            # alpha's error bar: scatter over seeds, or the fit error of a single packing.
-            alpha = t["alpha"][sel]
-            if np.count_nonzero(np.isfinite(alpha)) == 1:
-                s["alpha_std"][j] = t["alpha_err"][sel][np.isfinite(alpha)][0]
-        series[int(N)] = s
+            s[c] = np.array([groups[k][c][0] for k in keys])
+            s[c + "_std"] = np.array([groups[k][c][1] for k in keys])
+        s["alpha_std"] = np.array([groups[k]["alpha_bar"] for k in keys])
+        series[N] = s
     return series
 
 

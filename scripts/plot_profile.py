@@ -52,7 +52,9 @@ def parse_args(argv=None):
 def read_output(d, need_fit):
     up.require_dir(d)
     path = os.path.join(d, "response_profile.csv")
-    t = up.read_csv(path, ["r_mid", "d_mean", "d_sem", "count"], min_rows=1)
+    # Empty bins (count 0) have d_mean = d_sem = NaN.
+    t = up.read_csv(path, ["r_mid", "d_mean", "d_sem", "count"], allow_nan=["d_mean", "d_sem"],
+                    min_rows=1)
     keep = (t["count"] > 0) & (t["d_mean"] > 0) & (t["r_mid"] > 0)
     if not np.any(keep):
         raise up.UserError(f"{path}: no bin with count > 0 and d_mean > 0")

@@ -87,7 +87,8 @@ def main(argv=None):
     args = parse_args(argv)
     d = up.require_dir(args.dir)
     path = os.path.join(d, "response_field.csv")
-    t = up.read_csv(path, ["x", "y", "ux", "uy", "count"], min_rows=4)
+    # Empty bins (count 0) have ux = uy = NaN.
+    t = up.read_csv(path, ["x", "y", "ux", "uy", "count"], allow_nan=["ux", "uy"], min_rows=4)
     if np.any(t["count"] < 0):
         raise up.UserError(f"{path}: column 'count' has a negative value")
     summary_path = os.path.join(d, "probe_summary.json")

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Sets up, builds and runs the default test suite (C++ unit and physics tests, and the
-# plotting scripts' tests). Long validation runs: ctest --test-dir build/release -R Validation
+# Sets up, builds and runs the default test suite (every test label but validation; README,
+# "Tests"). Long validation runs: ctest --preset validation
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh

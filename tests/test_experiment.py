@@ -1,7 +1,8 @@
 """Tests of scripts/experiment.py at --scale tiny (about 30 s).
 
 Run from the repository root:  /usr/bin/python3 -m unittest tests/test_experiment.py
-Skipped when build/release/unjam is missing.
+The unjam binary: $UNJAM (ctest sets it to the build's own), else build/release/unjam;
+skipped when it is missing.
 """
 
 import csv
@@ -15,7 +16,7 @@ import tempfile
 import unittest
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-UNJAM = os.path.join(REPO, "build", "release", "unjam")
+UNJAM = os.path.abspath(os.environ.get("UNJAM") or os.path.join(REPO, "build", "release", "unjam"))
 SCRIPT = os.path.join(REPO, "scripts", "experiment.py")
 
 STAGE_LINE = re.compile(r"^\[(\d+)/(\d+)\] (.+?): .* \.\.\. (running|done in [\d.]+ s|"
@@ -23,8 +24,8 @@ STAGE_LINE = re.compile(r"^\[(\d+)/(\d+)\] (.+?): .* \.\.\. (running|done in [\d
 
 
 def run(out, *extra):
-    p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out, *extra],
-                       capture_output=True, text=True, cwd=REPO, timeout=300)
+    p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out, "--unjam", UNJAM,
+                        *extra], capture_output=True, text=True, cwd=REPO, timeout=300)
     if p.returncode != 0:
         raise AssertionError(f"experiment.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
     return p.stdout
@@ -41,8 +42,7 @@ def outcomes(stdout):
 
 
 @unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
-                     f"build/release/unjam is missing: build it first "
-                     f"(cmake --build build/release -j2)")
+                     f"{UNJAM} is missing: build it first (cmake --build build/release -j2)")
 class ExperimentTiny(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -176,7 +176,7 @@ class ExperimentTiny(unittest.TestCase):
         os.remove(os.path.join(d, "probe_summary.json"))   # the stage's outputs are incomplete
         env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
         p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", self.out,
-                            "--probe-g", "2e-9", "--threads", "1", "--mpi", "2",
+                            "--unjam", UNJAM, "--probe-g", "2e-9", "--threads", "1", "--mpi", "2",
                             "--mpirun", "mpirun --oversubscribe"],
                            capture_output=True, text=True, cwd=REPO, timeout=300, env=env)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
@@ -191,7 +191,7 @@ class ExperimentTiny(unittest.TestCase):
 
 
 @unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
-                     "build/release/unjam is missing")
+                     f"{UNJAM} is missing")
 class ExperimentArguments(unittest.TestCase):
     """Bad overrides are refused up front (a usage error, exit 2), before any stage runs."""
 
@@ -202,7 +202,8 @@ class ExperimentArguments(unittest.TestCase):
                                   (["--mus", "-1"], "--mus"), (["--ns", "2"], "at least 8"),
                                   (["--samples", "0"], "--samples"), (["--probe-g", "nan"], "--probe-g"),
                                   (["--probe-g", "-1e-9"], "--probe-g")]:
-                p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out, *extra],
+                p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out,
+                                    "--unjam", UNJAM, *extra],
                                    capture_output=True, text=True, cwd=REPO, timeout=60)
                 self.assertEqual(p.returncode, 2, (extra, p.stderr))
                 self.assertIn(phrase, p.stderr)
@@ -210,7 +211,8 @@ class ExperimentArguments(unittest.TestCase):
                 self.assertFalse(os.path.exists(out), extra)
 
     def test_unwritable_out_is_a_message_not_a_traceback(self):
-        p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", "/proc/unjam-x"],
+        p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", "/proc/unjam-x",
+                            "--unjam", UNJAM],
                            capture_output=True, text=True, cwd=REPO, timeout=60)
         self.assertEqual(p.returncode, 1, p.stderr)
         self.assertIn("cannot create the output directory", p.stderr)

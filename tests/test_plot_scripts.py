@@ -134,7 +134,7 @@ def make_field(d, W=10.0, h=0.5, seed=2):
             uy = ur * math.sin(th) + ut * math.cos(th)
             count = 0 if (r > W or rng.random() < 0.02) else int(rng.integers(5, 60))
             if count == 0:
-                ux = uy = 0.0
+                ux = uy = math.nan                        # as unjam writes an empty bin
             rows.append((float(xv), float(yv), ux, uy, count))
     write_csv(os.path.join(d, "response_field.csv"), ["x", "y", "ux", "uy", "count"], rows)
 
@@ -148,7 +148,7 @@ def make_profile(d, alpha=0.9, mu=0.1, N=300, seed=3, r_min=0.75, r_max=12.0, K=
     dm = 2.0 * r_mid ** -alpha * np.exp(rng.normal(0, 0.05, K))
     sem = 0.08 * dm
     count = rng.integers(50, 500, K)
-    dm[-1], sem[-1], count[-1] = 0.0, 0.0, 0  # an empty bin
+    dm[-1], sem[-1], count[-1] = math.nan, math.nan, 0  # an empty bin, as unjam writes it
     rows = [(float(edges[k]), float(edges[k + 1]), float(r_mid[k]), float(dm[k]), float(sem[k]),
              int(count[k]), 40) for k in range(K)]
     write_csv(os.path.join(d, "response_profile.csv"),

@@ -150,6 +150,8 @@ def signature_defaults(function):
                           "max-steps": "max_steps"}),
     ("probe", unjam.probe, {"method": "method", "g": "g", "dt": "dt",
                             "velocity-tol": "velocity_tol", "max-sweeps": "max_sweeps"}),
+    ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
+                              "method": "method"}),
 ])
 def test_defaults_equal_the_tool(command, function, names):
     cli, py = help_defaults(command), signature_defaults(function)

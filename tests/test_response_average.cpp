@@ -102,8 +102,8 @@ TEST(ResponseAverage, TwoProbesRotatedBy90DegreesGiveTheKnownMeanField) {
       EXPECT_NEAR(avg.field_mean(i, j).y(), expected.y(), 1e-12);
     }
 
-  // field.csv: x fastest, bin centres, the same numbers.
-  const CsvTable t = CsvTable::parse(avg.field_csv(), "field.csv");
+  // response_field.csv: x fastest, bin centres, the same numbers.
+  const CsvTable t = CsvTable::parse(avg.field_csv(), "response_field.csv");
   ASSERT_EQ(t.rows(), 36u);
   const std::size_t row = 2 * 6 + 4;  // i = 4, j = 2: (1.5, -0.5)
   EXPECT_EQ(t.number(row, t.column("x")), 1.5);
@@ -124,6 +124,12 @@ TEST(ResponseAverage, FieldBinEdges) {
   EXPECT_EQ(avg.field_count(1, 0), 0);
   EXPECT_EQ(avg.field_count(0, 1), 1);  // (-0.25, 0.25)
   EXPECT_EQ(avg.field_count(1, 1), 0);  // (1, 0) and (0, 1): upper edges are outside
+  // response_field.csv: an empty bin's mean is NaN, a filled one's a number.
+  const CsvTable t = CsvTable::parse(avg.field_csv(), "response_field.csv");
+  ASSERT_EQ(t.rows(), 4u);
+  EXPECT_EQ(t.number(0, t.column("ux")), 1.0);
+  for (const char* col : {"ux", "uy"}) EXPECT_EQ(t.field(1, t.column(col)), "nan") << col;
+  EXPECT_EQ(t.integer(1, t.column("count")), 0);
 }
 
 // d(r): probe 0 has |u|/g = 1 on four grains at r = 2, probe 1 has 3: d = 2, and the standard
@@ -156,11 +162,15 @@ TEST(ResponseAverage, ProfileMeanAndStandardError) {
   EXPECT_EQ(prof.count[1], 0);
   EXPECT_EQ(prof.d_mean[1], 0.0);
 
-  const CsvTable t = CsvTable::parse(avg.profile_csv(), "profile.csv");
+  const CsvTable t = CsvTable::parse(avg.profile_csv(), "response_profile.csv");
   ASSERT_EQ(t.rows(), 2u);
   for (const char* col : {"r_lo", "r_hi", "r_mid", "d_mean", "d_sem", "count", "probes"}) EXPECT_NO_THROW(t.column(col));
   EXPECT_EQ(t.number(0, t.column("d_mean")), prof.d_mean[0]);
   EXPECT_EQ(t.integer(0, t.column("probes")), 2);
+  // The empty bin [10, 100): no d, written NaN (the in-memory profile keeps 0, count 0).
+  EXPECT_EQ(t.field(1, t.column("d_mean")), "nan");
+  EXPECT_EQ(t.field(1, t.column("d_sem")), "nan");
+  EXPECT_EQ(t.integer(1, t.column("count")), 0);
 }
 
 // A random probe: grains at random frame positions with displacements over many decades.

@@ -78,15 +78,14 @@ nlohmann::ordered_json loads_json(const std::vector<RankLoad>& loads) {
   return j;
 }
 
-// bounds.csv, bounds.json and the report.
-void write_bounds(const BoundsOptions& opt, const Packing& packing, const EquilibriumSystem& sys,
-                  const RankInfo& rank, const ForceBounds& bounds, const ForceBoundsOptions& lp,
-                  const BoundsRun& run) {
-  const int Nc = sys.num_contacts();
+// bounds.csv: one row per contact of the system (17 significant digits, force units).
+// Also returns sum(fn_max - fn_min) / sum(fn) over those contacts (0 without force).
+std::string bounds_csv(const Packing& packing, const EquilibriumSystem& sys, const ForceBounds& bounds,
+                       double& width_over_fn) {
   std::string csv = "a,b,fn,fn_min,fn_max\n";
   double sum_width = 0.0, sum_fn = 0.0;
   char line[160];
-  for (int k = 0; k < Nc; ++k) {
+  for (int k = 0; k < sys.num_contacts(); ++k) {
     const Contact& c = packing.contacts[sys.contacts[k]];
     std::snprintf(line, sizeof line, "%d,%d,%.17g,%.17g,%.17g\n", c.a, c.b, c.fn,
                   bounds.fn_min[k], bounds.fn_max[k]);
@@ -94,14 +93,16 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
     sum_width += bounds.fn_max[k] - bounds.fn_min[k];
     sum_fn += c.fn;
   }
-  const double width_over_fn = sum_fn > 0.0 ? sum_width / sum_fn : 0.0;
-  const std::filesystem::path csv_path =
-      opt.out.empty() ? std::filesystem::path(opt.dir) / "bounds.csv" : std::filesystem::path(opt.out);
-  std::filesystem::path json_path = csv_path;
-  json_path.replace_extension(".json");
-  write_file_atomic(csv_path, csv);
+  width_over_fn = sum_fn > 0.0 ? sum_width / sum_fn : 0.0;
+  return csv;
+}
 
-  const nlohmann::ordered_json j = {
+nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& packing,
+                                   const EquilibriumSystem& sys, const RankInfo& rank,
+                                   const ForceBounds& bounds, const ForceBoundsOptions& lp,
+                                   const BoundsRun& run, double width_over_fn) {
+  const int Nc = sys.num_contacts();
+  return {
       {"program_version", kVersion},
       {"command", command_line()},
       {"packing", opt.dir},
@@ -129,7 +130,21 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
         {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", run.t_total}}},
       {"ranks", loads_json(run.loads)},
   };
-  write_file_atomic(json_path, j.dump(2) + "\n");
+}
+
+// bounds.csv, bounds.json and the report.
+void write_bounds(const BoundsOptions& opt, const Packing& packing, const EquilibriumSystem& sys,
+                  const RankInfo& rank, const ForceBounds& bounds, const ForceBoundsOptions& lp,
+                  const BoundsRun& run) {
+  const int Nc = sys.num_contacts();
+  double width_over_fn = 0.0;
+  const std::string csv = bounds_csv(packing, sys, bounds, width_over_fn);
+  const std::filesystem::path csv_path =
+      opt.out.empty() ? std::filesystem::path(opt.dir) / "bounds.csv" : std::filesystem::path(opt.out);
+  std::filesystem::path json_path = csv_path;
+  json_path.replace_extension(".json");
+  write_file_atomic(csv_path, csv);
+  write_file_atomic(json_path, bounds_json(opt, packing, sys, rank, bounds, lp, run, width_over_fn).dump(2) + "\n");
 
   std::printf("contacts used      %d of %zu (grains with contacts %zu)\n", Nc,
               packing.contacts.size(), sys.grains.size());
@@ -293,14 +308,14 @@ void add_bounds_command(CLI::App& app) {
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
   cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
-      ->check(non_negative_number());
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
       ->check(non_negative_number())
       ->capture_default_str();
-  cmd->add_option("--method", opt->method, "LP method: barrier (default) or simplex")
-      ->check(CLI::IsMember({"barrier", "simplex"}));
+  cmd->add_option("--method", opt->method, "LP method: barrier or simplex")
+      ->capture_default_str()->check(CLI::IsMember({"barrier", "simplex"}));
   cmd->add_option("--shard", opt->shard,
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");

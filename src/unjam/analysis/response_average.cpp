@@ -158,7 +158,8 @@ std::string ResponseAverage::field_csv() const {
   const double W = grid_.half_width, h = grid_.h;
   for (int j = 0; j < side_; ++j)
     for (int i = 0; i < side_; ++i) {
-      const Vec2 u = field_mean(i, j);
+      // An empty bin has no mean: NaN.
+      const Vec2 u = field_count(i, j) > 0 ? field_mean(i, j) : Vec2::Constant(std::nan(""));
       w.cell(-W + (i + 0.5) * h).cell(-W + (j + 0.5) * h).cell(u.x()).cell(u.y()).cell(field_count(i, j));
       w.end_row();
     }
@@ -169,7 +170,9 @@ std::string ResponseAverage::profile_csv() const {
   const RadialProfile p = profile();
   CsvWriter w({"r_lo", "r_hi", "r_mid", "d_mean", "d_sem", "count", "probes"});
   for (std::size_t k = 0; k < p.size(); ++k) {
-    w.cell(p.r_lo[k]).cell(p.r_hi[k]).cell(p.r_mid[k]).cell(p.d_mean[k]).cell(p.d_sem[k]);
+    const bool empty = p.count[k] == 0;  // no grain in the bin: d and its error are NaN
+    w.cell(p.r_lo[k]).cell(p.r_hi[k]).cell(p.r_mid[k]);
+    w.cell(empty ? std::nan("") : p.d_mean[k]).cell(empty ? std::nan("") : p.d_sem[k]);
     w.cell(p.count[k]).cell(p.probes[k]);
     w.end_row();
   }

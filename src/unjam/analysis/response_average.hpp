@@ -103,9 +103,10 @@ class ResponseAverage {
 
   RadialProfile profile() const;
 
-  // field.csv: x,y,ux,uy,count; one row per bin, x fastest; (x, y) the bin centre,
-  // (ux, uy) the mean field (units of g). profile.csv: r_lo,r_hi,r_mid,d_mean,d_sem,count,probes.
-  // Write them with write_file_atomic.
+  // response_field.csv: x,y,ux,uy,count; one row per bin, x fastest; (x, y) the bin centre,
+  // (ux, uy) the mean field (units of g), NaN in an empty bin (count 0).
+  // response_profile.csv: r_lo,r_hi,r_mid,d_mean,d_sem,count,probes; d_mean and d_sem NaN in
+  // an empty bin (count 0). Write them with write_file_atomic.
   std::string field_csv() const;
   std::string profile_csv() const;
 

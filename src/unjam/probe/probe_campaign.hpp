@@ -105,10 +105,13 @@ ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settin
 // (one probe per thread at a time; each thread keeps its LP model): the results in the order
 // of `contacts`, the same bytes for any thread count. should_stop (may be empty) is polled
 // before every probe is handed out; once it returns true, the results of the probes already
-// handed out (a prefix of `contacts`) are returned. Throws unjam::Error for an index out of range.
+// handed out (a prefix of `contacts`) are returned. progress (may be empty) is called with
+// (probes done, contacts.size()) as results arrive, one call at a time. Throws unjam::Error
+// for an index out of range, and the first error of a probe (naming its contact).
 std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
                                         const std::vector<int>& contacts,
-                                        const std::function<bool()>& should_stop = {});
+                                        const std::function<bool()>& should_stop = {},
+                                        const std::function<void(int, int)>& progress = {});
 
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,

@@ -1,0 +1,145 @@
+"""The report of scripts/experiment.py: measured values per mu, the verdicts against the
+paper's findings, parameters, timings and figures (OUT/report.md)."""
+
+import csv
+import math
+import os
+import time
+
+import sweep_table
+from experiment_stages import FIG4, fmt_mu
+from stage_runner import quote
+
+
+def read_table(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+QUANTITIES = [("phi", "phi"), ("z", "z"), ("F_cont_over_F0", "<F_cont>/F0"),
+              ("F_crit_over_F_cont", "<F_crit>/<F_cont>"), ("alpha", "alpha")]
+
+
+def pm(t):
+    m, s, n = t
+    return "—" if n == 0 else f"{m:.4f} ± {s:.4f}"
+
+
+def monotonic(vals, sign, tol):
+    """vals change monotonically in direction sign (+1 up, -1 down) up to tol."""
+    return all(sign * (b - a) >= -tol for a, b in zip(vals, vals[1:]))
+
+
+def findings(agg, fixed_agg, n_max):
+    """[(finding, paper, measured, verdict)] computed from the largest-N numbers."""
+    mus = sorted(mu for mu, n in agg if n == n_max)
+    col = {c: [agg[(mu, n_max)][c][0] for mu in mus] for c, _ in QUANTITIES}
+    out = []
+    near = lambda mu: 0.05 <= mu <= 0.2  # noqa: E731  "near mu = 0.1"
+
+    phi = col["phi"]
+    ok = (abs(phi[0] - 0.84) <= 0.01 and abs(phi[-1] - 0.80) <= 0.01
+          and monotonic(phi, -1, 0.002))
+    out.append(("packing fraction", "0.84 at low mu -> 0.80 at high mu, monotonic",
+                f"phi = {phi[0]:.4f} at mu = {fmt_mu(mus[0])}, {phi[-1]:.4f} at mu = "
+                f"{fmt_mu(mus[-1])}; monotonic: {'yes' if monotonic(phi, -1, 0.002) else 'no'}",
+                "agree" if ok else "disagree"))
+    for c, label in (("z", "z"), ("F_cont_over_F0", "<F_cont>/F0")):
+        v = col[c]
+        sign = -1 if v[-1] < v[0] else 1
+        mono = monotonic(v, sign, 0.02 * abs(v[0]))
+        out.append((f"{label} against mu", "plateaus at low and high mu, smooth monotonic change",
+                    f"{label} = {v[0]:.4f} at mu = {fmt_mu(mus[0])} -> {v[-1]:.4f} at mu = "
+                    f"{fmt_mu(mus[-1])}; monotonic: {'yes' if mono else 'no'}",
+                    "agree" if mono else "disagree"))
+    al = [(mu, a) for mu, a in zip(mus, col["alpha"]) if math.isfinite(a)]
+    if not al:
+        out.append(("alpha", "0.7-1.4, maximum near mu = 0.1",
+                    "no power-law fit (the packings are too small for the fit window)",
+                    "not measured"))
+    else:
+        lo, hi = min(a for _, a in al), max(a for _, a in al)
+        mu_star = max(al, key=lambda t: t[1])[0]
+        ok = lo >= 0.7 and hi <= 1.4 and near(mu_star)
+        out.append(("alpha", "0.7-1.4, maximum near mu = 0.1",
+                    f"alpha in [{lo:.3f}, {hi:.3f}] over {len(al)} mu; maximum at mu = "
+                    f"{fmt_mu(mu_star)}", "agree" if ok else "disagree"))
+    fc = col["F_crit_over_F_cont"]
+    j = max(range(len(mus)), key=lambda k: fc[k])
+    ends = abs(fc[0] - 1) <= 0.1 and abs(fc[-1] - 1) <= 0.1
+    out.append(("<F_crit>/<F_cont>", "1 at low and high mu, maximum near mu = 0.1",
+                f"maximum of <F_crit>/<F_cont> at mu = {fmt_mu(mus[j])} ({fc[j]:.4f}); "
+                f"{fc[0]:.4f} at mu = {fmt_mu(mus[0])}, {fc[-1]:.4f} at mu = {fmt_mu(mus[-1])}",
+                "agree" if (ends and near(mus[j])) else "disagree"))
+    if fixed_agg:
+        fmus = sorted(mu for mu, _ in fixed_agg)
+        fv = [fixed_agg[(mu, n)]["F_crit_over_F_cont"][0] for mu, n in sorted(fixed_agg)]
+        mono = monotonic(fv, 1, 0.01)
+        out.append(("fixed packing, varying mu", "<F_crit>/<F_cont> monotonic (no decrease "
+                    "beyond mu ~ 0.1)",
+                    f"<F_crit>/<F_cont> = {fv[0]:.4f} at mu = {fmt_mu(fmus[0])} -> {fv[-1]:.4f} "
+                    f"at mu = {fmt_mu(fmus[-1])}; monotonic: {'yes' if mono else 'no'}",
+                    "agree" if mono else "disagree"))
+    return out
+
+
+def write_report(path, args, cfg, R, figures, command):
+    """OUT/report.md from OUT/sweep.csv and OUT/fixed.csv; command: the experiment's command
+    line (a list)."""
+    out = os.path.dirname(path)
+    rows = read_table(os.path.join(out, "sweep.csv"))
+    agg = sweep_table.aggregate(rows)
+    fixed_path = os.path.join(out, "fixed.csv")
+    fixed_agg = sweep_table.aggregate(read_table(fixed_path)) if os.path.isfile(fixed_path) else {}
+    n_max = max(cfg["ns"])
+    L = ["# unjam experiment report", "",
+         f"Scale **{args.scale}**; written {time.strftime('%Y-%m-%d %H:%M:%S')}.", "",
+         "## Measured values per mu", "",
+         "Mean ± standard deviation over the seeds (0 for one seed); from `sweep.csv`.", "",
+         "| mu | N | seeds | " + " | ".join(lbl for _, lbl in QUANTITIES) + " |",
+         "|---|---|---|" + "---|" * len(QUANTITIES)]
+    for (mu, n), a in agg.items():
+        L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
+                 + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+    if fixed_agg:
+        L += ["", "Fixed packing (the mu = 0 packing re-relaxed at each mu; `fixed.csv`):", "",
+              "| mu | N | seeds | " + " | ".join(lbl for _, lbl in QUANTITIES) + " |",
+              "|---|---|---|" + "---|" * len(QUANTITIES)]
+        for (mu, n), a in fixed_agg.items():
+            L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
+                     + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+    L += ["", f"## Against the paper (PHYSICS.md section 9; measured at N = {n_max})", "",
+          "| finding | paper | measured | verdict |", "|---|---|---|---|"]
+    for f, paper, meas, verdict in findings(agg, fixed_agg, n_max):
+        L.append(f"| {f} | {paper} | {meas} | **{verdict}** |")
+    L += ["", "Criteria: phi within 0.01 of 0.84 / 0.80 and monotonic (tolerance 0.002); z and "
+          "<F_cont> monotonic (tolerance 2 %); alpha within [0.7, 1.4] with its maximum at "
+          "0.05 <= mu <= 0.2; <F_crit>/<F_cont> within 0.1 of 1 at the ends with its maximum at "
+          "0.05 <= mu <= 0.2; fixed packing monotonic (tolerance 0.01).", "",
+          "## Figures", ""]
+    for title, f in figures:
+        rel = os.path.relpath(f, out)
+        L.append(f"- {title}: [{rel}]({rel})" if os.path.isfile(f) else f"- {title}: (missing)")
+    L += ["", "## Parameters", "",
+          f"- scale: {args.scale}",
+          f"- mu: {cfg['mus']}", f"- N: {cfg['ns']}", f"- seeds: {cfg['seeds']}",
+          f"- probe: lp, g = {args.probe_g:g}, "
+          + (f"{cfg['probe_sample']} contacts per packing (seeded subset)" if cfg["probe_sample"]
+             else "every force-carrying contact"),
+          f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
+          f"samples = {cfg['samples']}",
+          f"- unjam: `{R.unjam}`, version `{R.version}`",
+          f"- threads: {args.threads or 'all cores'}"
+          + (f" per rank, probe stages over {args.mpi} MPI ranks (`{' '.join(R.launcher)}`)"
+             if args.mpi else ""),
+          f"- command line: `{quote(command)}`", "",
+          "## Timings", "",
+          "This run: 'ran' stages were computed now, 'cached' ones were skipped; the last column "
+          "is the time the stage took when it was computed.", "",
+          "| stage | what | this run | s this run | s when computed |", "|---|---|---|---|---|"]
+    for name, what, action, dt, dt0 in R.timings:
+        L.append(f"| {name} | `{what}` | {action} | {dt:.1f} | {dt0:.1f} |")
+    L.append(f"| total | | | {time.time() - R.t0:.1f} | |")
+    with open(path + ".tmp", "w") as f:
+        f.write("\n".join(L) + "\n")
+    os.replace(path + ".tmp", path)

@@ -1,0 +1,311 @@
+"""The experiment's definition: its scales, and its stage graph built as data.
+
+build(args, cfg, R) returns the stages of scripts/experiment.py in the order they run (see
+its docstring for what each does) and the list of figures for the report.  The packings are
+described first as plain records (directory, pack and probe stage names, unjam arguments);
+the stages and their dependencies are then read off these records.
+"""
+
+import csv
+import os
+import shutil
+import sys
+
+import sweep_table
+from stage_runner import Stage, StageError, nonempty, read_json
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCRIPTS = os.path.join(REPO, "scripts")
+PY = sys.executable or "/usr/bin/python3"
+
+# The scales, as data.  samples: ensemble networks for Fig. 4; probe_sample: contacts probed
+# per packing (a seeded subset; 0 = every force-carrying contact).
+SCALES = {
+    "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0},
+    "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
+             "probe_sample": 0},
+    "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
+              "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
+              "probe_sample": 1000},
+}
+FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
+# mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
+# F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
+# ~1e-4 R_max that count as 2-15 redundant contacts at N = 500-2000 (docs/method.md).
+FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
+FIG1_MU = 0.5
+PROBE_OUTPUTS = ["probes.csv", "response_field.csv", "response_profile.csv",
+                 "probe_summary.json", "probe_checkpoint.json"]
+
+
+def fmt_mu(mu):
+    return f"{mu:g}"
+
+
+def packing_static(d):
+    meta = read_json(os.path.join(d, "meta.json"))
+    return bool(meta and meta.get("state", {}).get("static") is True)
+
+
+def probe_done(d):
+    s = read_json(os.path.join(d, "probe_summary.json"))
+    return bool(s and "F_crit_over_F_cont" in s and "probes" in s)
+
+
+# ---------------------------------------------------------------- the stage builders
+
+def pack_stage(R, name, d, pack_args, deps=()):
+    """`unjam pack ARGS --out d`, resumed with --resume when a stopped run left d behind."""
+    params = {"command": ["unjam", "pack"] + [str(a) for a in pack_args] + ["--out", d],
+              "version": R.version}
+
+    def run(st):
+        if st.resume and os.path.isfile(os.path.join(d, "meta.json")) and not packing_static(d):
+            R.call(st, R.unjam_cmd("pack", "--resume", d, "--quiet"))
+            return
+        if os.path.exists(d):
+            shutil.rmtree(d)
+        os.makedirs(os.path.dirname(d), exist_ok=True)
+        R.call(st, R.unjam_cmd("pack", *pack_args, "--out", d, "--quiet"))
+    return Stage(name, f"unjam pack {' '.join(map(str, pack_args))}",
+                 os.path.join(d, "stage.json"), params, run, lambda: packing_static(d), deps)
+
+
+def probe_stage(R, name, d, g, sample, dep):
+    """`unjam probe --all`, or `--sample K` (seeded, K per packing) when sample > 0."""
+    select = ["--sample", str(sample)] if sample else ["--all"]
+    args = select + ["--method", "lp", "--g", repr(g)]
+    params = {"command": ["unjam", "probe", d] + args, "version": R.version}
+
+    def run(st):
+        if not st.resume:     # other parameters: no stale checkpoint or outputs
+            for f in PROBE_OUTPUTS:
+                p = os.path.join(d, f)
+                if os.path.exists(p):
+                    os.remove(p)
+        R.call(st, R.unjam_cmd("probe", d, *args, "--quiet", mpi=True))
+    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
+                 os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
+
+
+def plot_stage(R, name, outputs, cmds, deps):
+    """A stage of python scripts; outputs are files under OUT."""
+    params = {"commands": [[os.path.relpath(c, REPO) if isinstance(c, str) and c.startswith(
+        SCRIPTS) else c for c in cmd[1:]] for cmd in cmds]}
+
+    def run(st):
+        for o in outputs:
+            if os.path.exists(o):
+                os.remove(o)
+        for cmd in cmds:
+            R.call(st, cmd)
+    return Stage(name, ", ".join(os.path.relpath(o, R.out) for o in outputs),
+                 os.path.join(R.out, "stage.json"), params, run,
+                 lambda: all(nonempty(o) for o in outputs), deps)
+
+
+def summary_row(d, mu, n, seed):
+    s = read_json(os.path.join(d, "probe_summary.json"))
+    if s is None:
+        raise StageError(f"{d}/probe_summary.json does not read")
+    alpha = "" if "fit_error" in s or s.get("alpha") is None else repr(float(s["alpha"]))
+    aerr = "" if alpha == "" or s.get("alpha_err") is None else repr(float(s["alpha_err"]))
+    return {"mu": fmt_mu(mu), "N": n, "seed": seed, "phi": repr(float(s["phi"])),
+            "z": repr(float(s["z"])), "F_cont_over_F0": repr(float(s["F_cont_over_F0"])),
+            "F_crit_over_F_cont": repr(float(s["F_crit_over_F_cont"])), "alpha": alpha,
+            "alpha_err": aerr}
+
+
+def largest_force_contact(d):
+    """Row index in d/contacts.csv of the contact with the largest normal force fn."""
+    with open(os.path.join(d, "contacts.csv")) as f:
+        fn = [float(r["fn"]) for r in csv.DictReader(f)]
+    if not fn:
+        raise StageError(f"{d}/contacts.csv has no contact")
+    return max(range(len(fn)), key=lambda k: fn[k])
+
+
+def write_table(path, rows):
+    tmp = path + ".tmp"
+    with open(tmp, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=sweep_table.COLUMNS)
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(tmp, path)
+
+
+def table_stage(R, name, path, entries, deps):
+    """entries: [(dir, mu, N, seed)] -> one row each, from probe_summary.json."""
+    params = {"table": os.path.relpath(path, R.out),
+              "rows": [[os.path.relpath(d, R.out), mu, n, s] for d, mu, n, s in entries]}
+
+    def run(st):
+        st.record["commands"].append(f"(python) write {path} from {len(entries)} summaries")
+        write_table(path, [summary_row(d, mu, n, s) for d, mu, n, s in entries])
+
+    def check():
+        try:
+            with open(path) as f:
+                return len(list(csv.DictReader(f))) == len(entries)
+        except OSError:
+            return False
+    return Stage(name, os.path.relpath(path, R.out), os.path.join(R.out, "stage.json"),
+                 params, run, check, deps)
+
+
+# ---------------------------------------------------------------- the stage graph
+
+def sweep_packings(cfg, out):
+    """One record per (N, mu, seed) of the scale, in stage order: its directory, the names of
+    its pack and probe stages, the `unjam pack` arguments and the stages its pack depends on."""
+    packings = []
+    for n in cfg["ns"]:
+        for mu in cfg["mus"]:
+            for seed in cfg["seeds"]:
+                tag = f"N{n}-mu{fmt_mu(mu)}-s{seed}"
+                packings.append({
+                    "mu": mu, "n": n, "seed": seed, "dir": os.path.join(out, "packings", tag),
+                    "pack": f"pack {tag}", "probe": f"probe {tag}", "deps": [],
+                    "args": ["--n", n, "--mu", fmt_mu(mu), "--seed", seed]
+                    + (FRICTIONLESS_PACK if mu == 0 else [])})
+    return packings
+
+
+def fixed_packings(cfg, out, source):
+    """The fixed-packing series: `source` (the mu = 0 packing of the first N and seed)
+    re-relaxed at every other mu of the scale (`unjam pack --from`)."""
+    n0 = source["n"]
+    packings = []
+    for mu in cfg["mus"]:
+        if mu == 0:
+            continue
+        tag = f"fixed N{n0}-mu{fmt_mu(mu)}"
+        packings.append({
+            "mu": mu, "n": n0, "seed": source["seed"],
+            "dir": os.path.join(out, "fixed", f"N{n0}-mu{fmt_mu(mu)}"),
+            "pack": f"pack {tag}", "probe": f"probe {tag}", "deps": [source["pack"]],
+            "args": ["--from", source["dir"], "--mu", fmt_mu(mu)]})
+    return packings
+
+
+def packing_stages(R, packings, g, sample):
+    """The pack and the probe stage of every packing record."""
+    stages = []
+    for p in packings:
+        stages.append(pack_stage(R, p["pack"], p["dir"], p["args"], deps=p["deps"]))
+        stages.append(probe_stage(R, p["probe"], p["dir"], g, sample, p["pack"]))
+    return stages
+
+
+def table_entry(p):
+    return (p["dir"], p["mu"], p["n"], p["seed"])
+
+
+def ensemble_stage(R, d, samples):
+    """`unjam ensemble d --samples S --probe lp` (Fig. 4)."""
+    ens_args = ["--samples", samples, "--probe", "lp"]
+    params = {"command": ["unjam", "ensemble", d] + [str(a) for a in ens_args],
+              "version": R.version}
+
+    def run(st):
+        for f in ("ensemble.csv", "ensemble.json"):
+            if os.path.exists(os.path.join(d, f)):
+                os.remove(os.path.join(d, f))
+        R.call(st, R.unjam_cmd("ensemble", d, *ens_args))
+    return Stage("ensemble fig4", f"unjam ensemble {os.path.relpath(d, R.out)} "
+                 f"--samples {samples} --probe lp", os.path.join(d, "stage.json"), params, run,
+                 lambda: read_json(os.path.join(d, "ensemble.json")) is not None, ["pack fig4"])
+
+
+def probe_one_stage(R, p, g, one_dir, fig):
+    """The contact of largest normal force of packing record p probed alone, and its field
+    drawn (plot_probe_field.py)."""
+    d = p["dir"]
+    params = {"command": ["unjam", "probe", os.path.relpath(d, R.out), "--contact",
+                          "(largest fn)", "--method", "lp", "--g", repr(g)],
+              "plot": "plot_probe_field.py", "version": R.version}
+
+    def run(st):
+        k = largest_force_contact(d)
+        if os.path.exists(fig):
+            os.remove(fig)
+        R.call(st, R.unjam_cmd("probe", d, "--contact", k, "--method", "lp",
+                               "--g", repr(g), "--out", one_dir, "--quiet"))
+        R.call(st, [PY, os.path.join(SCRIPTS, "plot_probe_field.py"), one_dir, "--contact", k,
+                    "--packing", d, "--out", fig])
+    return Stage("probe one", f"unjam probe {os.path.relpath(d, R.out)} --contact K, "
+                 f"{os.path.relpath(fig, R.out)}", os.path.join(R.out, "stage.json"),
+                 params, run, lambda: nonempty(fig), [p["pack"]])
+
+
+def build(args, cfg, R):
+    """(stages in run order, [(figure title, path)]) of the experiment at configuration cfg."""
+    out = R.out
+    sweep = sweep_packings(cfg, out)
+    of = {(p["mu"], p["n"], p["seed"]): p for p in sweep}
+    n0, s0 = cfg["ns"][0], cfg["seeds"][0]
+    source = of.get((0, n0, s0))                 # the fixed series exists when mu = 0 is swept
+    fixed = fixed_packings(cfg, out, source) if source else []
+    stages = packing_stages(R, sweep, args.probe_g, cfg["probe_sample"])
+    stages += packing_stages(R, fixed, args.probe_g, cfg["probe_sample"])
+
+    # Fig. 4
+    d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
+    stages.append(pack_stage(R, "pack fig4", d4, ["--n", FIG4["n"], "--mu", fmt_mu(FIG4["mu"]),
+                                                  "--seed", FIG4["seed"]]))
+    stages.append(ensemble_stage(R, d4, cfg["samples"]))
+    fig4 = os.path.join(out, "fig4-ensemble.png")
+    stages.append(plot_stage(R, "plot fig4", [fig4],
+                             [[PY, os.path.join(SCRIPTS, "plot_fig4.py"), d4, "--out", fig4]],
+                             ["ensemble fig4"]))
+    # Tables
+    sweep_csv = os.path.join(out, "sweep.csv")
+    fixed_csv = os.path.join(out, "fixed.csv")
+    stages.append(table_stage(R, "table sweep", sweep_csv, [table_entry(p) for p in sweep],
+                              [p["probe"] for p in of.values()]))
+    if source:
+        series = [source] + fixed
+        stages.append(table_stage(R, "table fixed", fixed_csv,
+                                  [(source["dir"], 0.0, n0, s0)] + [table_entry(p) for p in fixed],
+                                  [p["probe"] for p in series]))
+    # Figures
+    fig3 = os.path.join(out, "fig3-friction-sweep.png")
+    cmd3 = [PY, os.path.join(SCRIPTS, "plot_friction_sweep.py"), sweep_csv]
+    cmd3 += (["--fixed", fixed_csv] if source else []) + ["--out", fig3]
+    stages.append(plot_stage(R, "plot fig3", [fig3], [cmd3],
+                             ["table sweep"] + (["table fixed"] if source else [])))
+    nmax = max(cfg["ns"])
+    # Fig. 2 per size: d(r) of every mu (first seed); fig2-profiles.png is the largest N.
+    fig2_of = {}
+    for n in cfg["ns"]:
+        fig2_of[n] = os.path.join(out, "fig2-profiles.png" if n == nmax
+                                  else f"fig2-profiles-N{n}.png")
+        curves = [of[(mu, n, s0)] for mu in cfg["mus"]]
+        stages.append(plot_stage(
+            R, "plot fig2" if n == nmax else f"plot fig2 N{n}", [fig2_of[n]],
+            [[PY, os.path.join(SCRIPTS, "plot_profile.py"), *[p["dir"] for p in curves],
+              "--labels", *[f"mu = {fmt_mu(mu)}" for mu in cfg["mus"]], "--out", fig2_of[n]]],
+            [p["probe"] for p in curves]))
+    fig2 = fig2_of[nmax]
+    mu1 = FIG1_MU if FIG1_MU in cfg["mus"] else max(cfg["mus"])
+    p1 = of[(mu1, nmax, s0)]
+    fig1f = os.path.join(out, "fig1-field.png")
+    fig1p = os.path.join(out, "fig1-packing.png")
+    stages.append(plot_stage(
+        R, "plot fig1", [fig1f, fig1p],
+        [[PY, os.path.join(SCRIPTS, "plot_response_field.py"), p1["dir"], "--out", fig1f],
+         [PY, os.path.join(SCRIPTS, "plot_packing.py"), p1["dir"], "--out", fig1p]],
+        [p1["probe"]]))
+    # One probe's own displacement field: the contact of largest normal force of that packing.
+    fig_one = os.path.join(out, "fig-probe-field.png")
+    stages.append(probe_one_stage(R, p1, args.probe_g, os.path.join(out, "probe-one"), fig_one))
+    figures = [(f"Fig. 1: mean displacement field, N = {nmax}, mu = {fmt_mu(mu1)}", fig1f),
+               (f"Fig. 1: the packing and its force chains, N = {nmax}, mu = {fmt_mu(mu1)}",
+                fig1p),
+               (f"One probe's displacement field (the contact of largest force), N = {nmax}, "
+                f"mu = {fmt_mu(mu1)}", fig_one),
+               (f"Fig. 2: d(r) per mu, N = {nmax}", fig2),
+               *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
+               ("Fig. 3: friction sweep (with the fixed-packing inset)", fig3),
+               (f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
+    return stages, figures

@@ -1,0 +1,121 @@
+#include "unjam/campaign/ensemble_run.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "unjam/probe/probe_campaign.hpp"
+
+namespace unjam {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Mean over contacts with a nonzero LP width of (sampled width) / (LP width); 1 if none.
+double mean_coverage(const SampledForces& s, const ForceBounds& b, double F0) {
+  double sum = 0.0;
+  int n = 0;
+  for (Eigen::Index k = 0; k < b.fn_max.size(); ++k) {
+    const double width = b.fn_max[k] - b.fn_min[k];
+    if (width > 1e-9 * F0) {
+      sum += (s.sample_max[k] - s.sample_min[k]) / width;
+      ++n;
+    }
+  }
+  return n > 0 ? sum / n : 1.0;
+}
+
+SamplerReport columns(const SampledForces& s, const ForceBounds& b, double F0, double seconds) {
+  return {s.sample_min, s.sample_max, s.mean, s.std, mean_coverage(s, b, F0), seconds};
+}
+
+// F_crit of every force-carrying contact of the system, by probe_contacts (the campaign's
+// loop: errors inside the parallel region are caught there and rethrown naming the contact).
+void run_probes(const Packing& packing, const EnsembleSettings& in, int threads, EnsembleReport& r) {
+  const EquilibriumSystem& sys = r.system;
+  std::vector<int> todo, contacts;  // positions in the system, and their packing contacts
+  for (int k = 0; k < sys.num_contacts(); ++k)
+    if (packing.contacts[sys.contacts[k]].fn > in.fn_tol * sys.F0) {
+      todo.push_back(k);
+      contacts.push_back(sys.contacts[k]);
+    }
+  CampaignSettings s;
+  s.method = r.probe == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
+  s.nlgs.g = s.kinematic.g = in.probe_g;
+  s.nlgs.dt = in.probe_dt;
+  s.nlgs.velocity_tol = in.probe_velocity_tol;
+  s.nlgs.bath.P_ext = packing.meta.P_ext;
+  const std::string what = "probe " + r.probe + " (contacts)";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(threads);  // probe_contacts runs on omp_get_max_threads() threads
+  std::vector<ProbeResult> results;
+  try {
+    results = probe_contacts(packing, s, contacts, {}, [&](int done, int total) {
+      if (in.progress) in.progress(what, done, total);
+    });
+  } catch (...) {
+    omp_set_num_threads(saved);
+    throw;
+  }
+  omp_set_num_threads(saved);
+  r.probe_seconds = seconds_since(t0);
+  r.probes.resize(sys.num_contacts());
+  for (std::size_t i = 0; i < results.size(); ++i) r.probes[todo[i]] = results[i];
+  for (int k = 0; k < sys.num_contacts(); ++k)
+    if (const auto& p = r.probes[k]) {
+      r.f_crit_over_fn_max.push_back(p->f_crit / r.bounds.fn_max[k]);
+      r.unconverged += p->converged ? 0 : 1;
+    }
+}
+
+}  // namespace
+
+double quantile(std::vector<double> x, double q) {
+  std::sort(x.begin(), x.end());
+  const double pos = q * (x.size() - 1.0);
+  const std::size_t i = static_cast<std::size_t>(pos);
+  if (i + 1 >= x.size()) return x.back();
+  return x[i] + (pos - i) * (x[i + 1] - x[i]);
+}
+
+EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {
+  EnsembleReport r;
+  r.system = build_equilibrium_system(packing, select_contacts(packing, in.gap_tol, in.fn_tol));
+  const EquilibriumSystem& sys = r.system;
+  r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "nlgs" : "lp";
+  const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
+  ForceBoundsOptions lp;
+  lp.threads = threads;
+  r.bounds = compute_force_bounds(sys, lp);
+  if (in.hit_and_run) {
+    HitAndRunOptions hr;
+    hr.samples = in.samples;
+    hr.seed = in.seed;
+    hr.thin = in.thin;
+    hr.burn_in = in.burn_in;
+    hr.on_sample = in.on_sample;
+    const auto t = std::chrono::steady_clock::now();
+    r.hit_and_run = sample_hit_and_run(sys, r.bounds, hr);
+    r.hr_columns = columns(*r.hit_and_run, r.bounds, sys.F0, seconds_since(t));
+  }
+  if (in.walk) {
+    RandomWalkOptions walk;
+    walk.samples = in.samples;
+    walk.seed = in.seed;
+    walk.kick = in.kick;
+    walk.tol = in.walk_tol;
+    if (in.progress) walk.progress = [&in](int done, int total) { in.progress("random walk (steps)", done, total); };
+    const auto t = std::chrono::steady_clock::now();
+    r.walk = sample_random_walk(packing, sys, walk);
+    r.walk_columns = columns(*r.walk, r.bounds, sys.F0, seconds_since(t));
+  }
+  if (r.probe != "none") run_probes(packing, in, threads, r);
+  return r;
+}
+
+}  // namespace unjam

@@ -1,0 +1,71 @@
+#pragma once
+// One packing's ensemble of admissible force networks (docs/ensemble.md; `unjam ensemble`):
+// the exact LP interval [fn_min, fn_max] of every contact of the admissible set, the
+// per-contact statistics of the samplers (hit-and-run, uniform on the admissible polytope;
+// the paper's random walk of kicks relaxed by the static solve) and the critical force F_crit
+// of every force-carrying contact, probed over the threads by probe/probe_campaign's loop
+// (probe_contacts). Above ensemble/ and probe/, below the tool.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/ensemble/hit_and_run.hpp"
+#include "unjam/ensemble/random_walk.hpp"
+#include "unjam/packing/packing.hpp"
+#include "unjam/probe/probe_result.hpp"
+
+namespace unjam {
+
+struct EnsembleSettings {
+  bool hit_and_run = true, walk = true;  // the samplers to run
+  std::string probe;              // nlgs | lp | none; empty: nlgs up to 200 contacts, else lp
+  int samples = 20000;            // networks per sampler (walk: steps)
+  std::uint64_t seed = 1;         // of both samplers
+  int thin = 0, burn_in = 0;      // hit-and-run (HitAndRunOptions)
+  double kick = 1.0;              // walk kick amplitude / <F_n>
+  double walk_tol = 1e-10;        // walk relaxation residual / F0
+  double probe_g = 1e-9;          // probe opening (R_max)
+  double probe_dt = 1e-3;         // nlgs probe time step (t0)
+  double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
+  double gap_tol = 1e-9;          // admissible set: touching, gap <= gap_tol (R_max) ...
+  double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
+  int threads = 0;                // LP bounds and probes; 0: omp_get_max_threads()
+  std::function<void(const ForceNetwork&)> on_sample;  // every hit-and-run sample; may be empty
+  // (what, done, total) as the walk and the probes go on; may be empty.
+  std::function<void(const std::string&, int, int)> progress;
+};
+
+// Per-contact statistics of one sampler, and its mean sampled width / LP width.
+struct SamplerReport {
+  Eigen::VectorXd min, max, mean, std;  // per contact of the system
+  double coverage = 0.0;  // mean over contacts with LP width > 1e-9 F0 of sampled / LP width
+  double seconds = 0.0;
+};
+
+struct EnsembleReport {
+  EquilibriumSystem system;           // the admissible set
+  ForceBounds bounds;                 // per contact of the system
+  std::optional<HitAndRunResult> hit_and_run;
+  std::optional<RandomWalkResult> walk;
+  std::optional<SamplerReport> hr_columns, walk_columns;
+  std::string probe;                  // the probe method used: nlgs, lp or none
+  std::vector<std::optional<ProbeResult>> probes;  // per contact of the system (force-carrying)
+  std::vector<double> f_crit_over_fn_max;          // over the probed contacts, in system order
+  int unconverged = 0;                // probes that did not converge
+  double probe_seconds = 0.0;
+};
+
+// Every part of the ensemble of `packing` with `settings`. Throws unjam::Error as the
+// samplers and probes do (the probes' errors name the contact).
+EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& settings);
+
+// Linear-interpolation quantile q in [0, 1] of x (non-empty).
+double quantile(std::vector<double> x, double q);
+
+}  // namespace unjam

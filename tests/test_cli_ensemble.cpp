@@ -1,0 +1,129 @@
+// `unjam ensemble` end to end on the fixture p50-mu0.1: the LP intervals in ensemble.csv
+// against the fixture's independent ones (HiGHS, bounds-reference.csv), both samplers' ranges
+// inside them, F_crit of the LP probe equal to fn_max on every force-carrying contact, and
+// ensemble.json against ensemble.csv (and its command line); a fixed seed gives the same
+// bytes; --help of ensemble and bounds gives the defaults.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "cli_fixture_checks.hpp"
+#include "cli_run.hpp"
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/packing/csv_table.hpp"
+
+namespace unjam {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::read_json_file;
+using testing::reference_bounds;
+using testing::run_tool;
+
+class CliEnsemble : public testing::FixtureCopy {
+ protected:
+  void SetUp() override { copy("p50-mu0.1"); }
+};
+
+TEST_F(CliEnsemble, LpIntervalsSampledRangesAndCriticalForces) {
+  const std::string command = "ensemble " + q(dir_) + " --samples 300 --probe lp --threads 2";
+  const testing::ToolRun r = run_tool(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable t = CsvTable::read(dir_ / "ensemble.csv");
+  const nlohmann::json j = read_json_file(dir_ / "ensemble.json");
+  const double F0 = read_json_file(dir_ / "meta.json")["F0"].get<double>();
+  const auto ref = reference_bounds("p50-mu0.1");
+  const double tol = 1e-6 * F0;
+
+  ASSERT_EQ(t.rows(), ref.size()) << "the admissible set: every force-carrying or touching contact";
+  const auto col = [&t](const char* name) { return t.column(name); };
+  int probed = 0;
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    const int a = static_cast<int>(t.integer(i, col("a"))), b = static_cast<int>(t.integer(i, col("b")));
+    ASSERT_EQ(ref.count({a, b}), 1u) << a << "-" << b;
+    const auto [lo, hi] = ref.at({a, b});
+    const double fn_min = t.number(i, col("fn_min")), fn_max = t.number(i, col("fn_max"));
+    EXPECT_NEAR(fn_min, lo, tol) << a << "-" << b;
+    EXPECT_NEAR(fn_max, hi, tol) << a << "-" << b;
+    for (const std::string s : {"hr_", "walk_"}) {
+      const double mn = t.number(i, t.column(s + "min")), mx = t.number(i, t.column(s + "max"));
+      const double mean = t.number(i, t.column(s + "mean"));
+      EXPECT_GE(mn, fn_min - tol) << s << " " << a << "-" << b;
+      EXPECT_LE(mx, fn_max + tol) << s << " " << a << "-" << b;
+      EXPECT_LE(mn, mean) << s << " " << a << "-" << b;
+      EXPECT_LE(mean, mx) << s << " " << a << "-" << b;
+      EXPECT_GE(t.number(i, t.column(s + "std")), 0.0);
+    }
+    if (t.number(i, col("fn")) > 1e-9 * F0) {
+      ++probed;
+      EXPECT_NEAR(t.number(i, col("f_crit")), fn_max, tol) << a << "-" << b;
+      EXPECT_EQ(t.field(i, col("f_crit_method")), "lp");
+      EXPECT_EQ(t.integer(i, col("probe_converged")), 1);
+    } else {
+      EXPECT_EQ(t.field(i, col("f_crit")), "") << "no probe of a contact without force";
+    }
+  }
+  EXPECT_EQ(probed, 81);
+
+  EXPECT_NE(j["command"].get<std::string>().find("ensemble " + dir_.string() + " --samples 300"),
+            std::string::npos) << "ensemble.json records the command line";
+  EXPECT_EQ(j["contacts_used"].get<std::size_t>(), t.rows());
+  EXPECT_DOUBLE_EQ(j["F0"].get<double>(), F0);
+  EXPECT_EQ(j["samples"].get<int>(), 300);
+  EXPECT_EQ(j["probe"]["method"], "lp");
+  EXPECT_EQ(j["probe"]["contacts_probed"].get<int>(), probed);
+  EXPECT_EQ(j["probe"]["unconverged"].get<int>(), 0);
+  EXPECT_NEAR(j["probe"]["f_crit_over_fn_max"]["min"].get<double>(), 1.0, 1e-6);
+  EXPECT_NEAR(j["probe"]["f_crit_over_fn_max"]["max"].get<double>(), 1.0, 1e-6);
+  EXPECT_EQ(j["probe"]["f_crit_over_fn_max"]["within_1_percent"].get<int>(), probed);
+  for (const char* m : {"hit_and_run", "walk"}) {
+    EXPECT_EQ(j["methods"][m]["samples"].get<int>(), 300) << m;
+    const double eta = j["methods"][m]["eta"].get<double>();
+    const double coverage = j["methods"][m]["mean_coverage_of_lp_width"].get<double>();
+    EXPECT_GT(eta, 0.0) << m;
+    EXPECT_GT(coverage, 0.0) << m;
+    EXPECT_LE(coverage, 1.0 + 1e-9) << m;
+  }
+
+  // The same seed: the same table, on another thread count.
+  const std::string first = read_file(dir_ / "ensemble.csv");
+  const testing::ToolRun again = run_tool("ensemble " + q(dir_) + " --samples 300 --probe lp --threads 1");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(read_file(dir_ / "ensemble.csv"), first);
+}
+
+TEST_F(CliEnsemble, OneSamplerWithoutProbesWritesOnlyItsColumns) {
+  const testing::ToolRun r =
+      run_tool("ensemble " + q(dir_) + " --samples 50 --method hit-and-run --probe none --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable t = CsvTable::read(dir_ / "ensemble.csv");
+  EXPECT_EQ(t.header(), (std::vector<std::string>{"a", "b", "fn", "fn_min", "fn_max", "hr_min",
+                                                  "hr_max", "hr_mean", "hr_std"}));
+  const nlohmann::json j = read_json_file(dir_ / "ensemble.json");
+  EXPECT_TRUE(j["methods"].contains("hit_and_run"));
+  EXPECT_FALSE(j["methods"].contains("walk"));
+  EXPECT_EQ(j["probe"]["method"], "none");
+  EXPECT_FALSE(j["probe"].contains("contacts_probed"));
+}
+
+// --help gives every option's default (CLI11 prints it after the type: "--samples INT=20000").
+TEST(CliHelp, BoundsAndEnsembleShowTheirDefaults) {
+  const testing::ToolRun e = run_tool("ensemble --help");
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  for (const char* d : {"--method TEXT:{hit-and-run,walk,both}=both", "--samples INT:NUMBER > 0=20000",
+                        "--seed UINT:SEED=1", "--thin INT:NUMBER >= 0=0", "--burn-in INT:NUMBER >= 0=0",
+                        "--kick FLOAT:NUMBER >= 0=1", "--walk-tol FLOAT:NUMBER > 0=1e-10",
+                        "--probe-g FLOAT:NUMBER > 0=1e-09", "--probe-dt FLOAT:NUMBER > 0=0.001",
+                        "--probe-velocity-tol FLOAT:NUMBER > 0=1e-06", "--gap-tol FLOAT:NUMBER >= 0=1e-09",
+                        "--fn-tol FLOAT:NUMBER >= 0=1e-09", "--threads INT:NUMBER >= 0=0"})
+    EXPECT_NE(e.output.find(d), std::string::npos) << d << " in\n" << e.output;
+  const testing::ToolRun b = run_tool("bounds --help");
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  for (const char* d : {"--gap-tol FLOAT:NUMBER >= 0=1e-09", "--fn-tol FLOAT:NUMBER >= 0=1e-09",
+                        "--threads INT:NUMBER >= 0=0", "--method TEXT:{barrier,simplex}=barrier"})
+    EXPECT_NE(b.output.find(d), std::string::npos) << d << " in\n" << b.output;
+}
+
+}  // namespace
+}  // namespace unjam

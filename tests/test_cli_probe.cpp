@@ -1,0 +1,124 @@
+// `unjam probe` end to end on the fixture p50-mu0.1 with the LP probe: F_crit of a single
+// contact (--contact K) and of a seeded subset (--sample S) against the fixture's independent
+// maxima fn_max (HiGHS, bounds-reference.csv: the LP probe's F_crit is that maximum), the
+// opening of the probed pair in the written displacement field, and probes.csv against
+// probe_summary.json.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "cli_fixture_checks.hpp"
+#include "cli_run.hpp"
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/packing/csv_table.hpp"
+
+namespace unjam {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::printed_value;
+using testing::read_json_file;
+using testing::reference_bounds;
+using testing::run_tool;
+
+class CliProbe : public testing::FixtureCopy {
+ protected:
+  void SetUp() override { copy("p50-mu0.1"); }
+  double F0() const { return read_json_file(dir_ / "meta.json")["F0"].get<double>(); }
+};
+
+TEST_F(CliProbe, SingleContactLpEqualsTheReferenceMaximumAndOpensThePair) {
+  const CsvTable contacts = CsvTable::read(dir_ / "contacts.csv");
+  const auto ref = reference_bounds("p50-mu0.1");
+  const double g = 1e-9;
+  for (const int k : {1, 3}) {
+    const fs::path out = root_ / ("one-" + std::to_string(k));
+    fs::create_directories(out);
+    const testing::ToolRun r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+                                        " --method lp --out " + q(out));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const int a = static_cast<int>(contacts.integer(k, contacts.column("a")));
+    const int b = static_cast<int>(contacts.integer(k, contacts.column("b")));
+    ASSERT_EQ(ref.count({a, b}), 1u) << "contact " << k;
+    const double fn_max = ref.at({a, b}).second, fn = contacts.number(k, contacts.column("fn"));
+    // Printed with 6 decimals in units of F0.
+    EXPECT_NEAR(printed_value(r.output, "F_crit / F0"), fn_max / F0(), 2e-6) << r.output;
+    EXPECT_NEAR(printed_value(r.output, "F_cont / F0"), fn / F0(), 2e-6) << r.output;
+    EXPECT_NE(r.output.find("converged yes"), std::string::npos) << r.output;
+
+    // The field: one row per grain; u / g in ux_g, uy_g; the pair opens by g along n
+    // (the kinematic field's residual: within 10 %).
+    const CsvTable field = CsvTable::read(out / ("probe-" + std::to_string(k) + ".csv"));
+    ASSERT_EQ(field.rows(), 50u);
+    const std::size_t ux = field.column("ux"), uy = field.column("uy");
+    for (std::size_t i = 0; i < field.rows(); ++i) {
+      EXPECT_EQ(field.integer(i, field.column("id")), static_cast<std::int64_t>(i));
+      EXPECT_NEAR(field.number(i, field.column("ux_g")), field.number(i, ux) / g, 1e-9);
+    }
+    const double nx = contacts.number(k, contacts.column("nx")), ny = contacts.number(k, contacts.column("ny"));
+    const double opening = (field.number(b, ux) - field.number(a, ux)) * nx + (field.number(b, uy) - field.number(a, uy)) * ny;
+    EXPECT_NEAR(opening / g, 1.0, 0.1) << "contact " << k;
+  }
+}
+
+TEST_F(CliProbe, SampleProbesSeededForceCarryingContactsAndSummarisesThem) {
+  const std::string args = " --sample 10 --method lp --quiet --threads 2 --out ";
+  const fs::path out = root_ / "sample", again = root_ / "again", other = root_ / "other";
+  for (const fs::path& d : {out, again, other}) fs::create_directories(d);
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(out));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  const CsvTable probes = CsvTable::read(out / "probes.csv");
+  const CsvTable contacts = CsvTable::read(dir_ / "contacts.csv");
+  const auto ref = reference_bounds("p50-mu0.1");
+  const double F0 = this->F0();
+  ASSERT_EQ(probes.rows(), 10u);
+  std::set<std::int64_t> seen;
+  double sum_crit = 0.0, sum_cont = 0.0;
+  for (std::size_t i = 0; i < probes.rows(); ++i) {
+    const std::int64_t k = probes.integer(i, probes.column("contact"));
+    EXPECT_TRUE(seen.insert(k).second) << "contact " << k << " probed twice";
+    const int a = static_cast<int>(probes.integer(i, probes.column("a")));
+    const int b = static_cast<int>(probes.integer(i, probes.column("b")));
+    EXPECT_EQ(a, contacts.integer(k, contacts.column("a")));
+    EXPECT_EQ(b, contacts.integer(k, contacts.column("b")));
+    const double f_cont = probes.number(i, probes.column("f_cont"));
+    const double f_crit = probes.number(i, probes.column("f_crit"));
+    EXPECT_EQ(f_cont, contacts.number(k, contacts.column("fn")));
+    EXPECT_GT(f_cont, 1e-9 * F0) << "a probed contact carries force";
+    ASSERT_EQ(ref.count({a, b}), 1u);
+    EXPECT_NEAR(f_crit, ref.at({a, b}).second, 1e-6 * F0) << "contact " << k;
+    EXPECT_EQ(probes.field(i, probes.column("method")), "lp");
+    EXPECT_EQ(probes.integer(i, probes.column("converged")), 1);
+    sum_crit += f_crit;
+    sum_cont += f_cont;
+  }
+  const nlohmann::json s = read_json_file(out / "probe_summary.json");
+  EXPECT_EQ(s["probes"].get<int>(), 10);
+  EXPECT_EQ(s["not_converged"].get<int>(), 0);
+  EXPECT_EQ(s["method"], "lp");
+  EXPECT_DOUBLE_EQ(s["F0"].get<double>(), F0);
+  // <F_crit>/<F_cont>: a ratio of the means over the probed contacts.
+  EXPECT_NEAR(s["F_crit_over_F_cont"].get<double>(), sum_crit / sum_cont, 1e-12);
+  EXPECT_NEAR(s["F_cont_over_F0"].get<double>(), sum_cont / 10 / F0, 1e-12);
+  EXPECT_NE(s["command"].get<std::string>().find("--sample 10"), std::string::npos);
+  for (const char* f : {"response_field.csv", "response_profile.csv"})
+    EXPECT_GT(CsvTable::read(out / f).rows(), 0u) << f;
+
+  // The subset is seeded: the same seed gives the same bytes, another seed other contacts.
+  r = run_tool("probe " + q(dir_) + args + q(again));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_file(again / "probes.csv"), read_file(out / "probes.csv"));
+  r = run_tool("probe " + q(dir_) + args + q(other) + " --seed 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable second = CsvTable::read(other / "probes.csv");
+  std::set<std::int64_t> seen2;
+  for (std::size_t i = 0; i < second.rows(); ++i) seen2.insert(second.integer(i, second.column("contact")));
+  EXPECT_EQ(seen2.size(), 10u);
+  EXPECT_NE(seen2, seen);
+}
+
+}  // namespace
+}  // namespace unjam

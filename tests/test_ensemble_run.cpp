@@ -1,0 +1,87 @@
+// compute_ensemble (campaign/ensemble_run), the library function behind `unjam ensemble`, on
+// the fixture p50-mu0.1: the admissible set and LP intervals, the sampler chosen, F_crit of
+// the LP probe (= fn_max) on exactly the force-carrying contacts, the same on 1 and 2 threads.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "unjam/campaign/ensemble_run.hpp"
+#include "unjam/packing/packing_io.hpp"
+
+namespace unjam {
+namespace {
+
+const Packing& fixture_p50() {
+  static const Packing p = read_packing(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu0.1");
+  return p;
+}
+
+EnsembleSettings lp_hit_and_run(int threads) {
+  EnsembleSettings s;
+  s.walk = false;
+  s.samples = 100;
+  s.probe = "lp";
+  s.threads = threads;
+  return s;
+}
+
+TEST(EnsembleRun, LpProbesOfTheForceCarryingContactsReachFnMax) {
+  const Packing& p = fixture_p50();
+  const EnsembleReport r = compute_ensemble(p, lp_hit_and_run(2));
+  const int Nc = r.system.num_contacts();
+  ASSERT_EQ(Nc, 81);
+  EXPECT_EQ(r.probe, "lp");
+  ASSERT_TRUE(r.hit_and_run && r.hr_columns);
+  EXPECT_FALSE(r.walk || r.walk_columns);
+  EXPECT_EQ(r.hit_and_run->samples, 100);
+  ASSERT_EQ(r.bounds.fn_max.size(), Nc);
+  ASSERT_EQ(r.hr_columns->min.size(), Nc);
+  ASSERT_EQ(static_cast<int>(r.probes.size()), Nc);
+  const double F0 = r.system.F0, tol = 1e-6 * F0;
+  int probed = 0;
+  for (int k = 0; k < Nc; ++k) {
+    const bool carries = p.contacts[r.system.contacts[k]].fn > 1e-9 * F0;
+    ASSERT_EQ(r.probes[k].has_value(), carries) << "contact " << k;
+    EXPECT_LE(r.bounds.fn_min[k], r.hr_columns->min[k] + tol);
+    EXPECT_GE(r.bounds.fn_max[k], r.hr_columns->max[k] - tol);
+    if (!carries) continue;
+    ++probed;
+    EXPECT_EQ(r.probes[k]->contact, r.system.contacts[k]);
+    EXPECT_NEAR(r.probes[k]->f_crit, r.bounds.fn_max[k], tol) << "contact " << k;
+  }
+  ASSERT_EQ(static_cast<int>(r.f_crit_over_fn_max.size()), probed);
+  for (const double x : r.f_crit_over_fn_max) EXPECT_NEAR(x, 1.0, 1e-6);
+  EXPECT_EQ(r.unconverged, 0);
+  EXPECT_GT(r.hr_columns->coverage, 0.0);
+  EXPECT_LE(r.hr_columns->coverage, 1.0 + 1e-9);
+  EXPECT_NEAR(quantile(r.f_crit_over_fn_max, 0.5), 1.0, 1e-6);
+
+  // One thread: the same intervals, samples and critical forces, bit for bit.
+  const EnsembleReport one = compute_ensemble(p, lp_hit_and_run(1));
+  EXPECT_EQ(one.bounds.fn_max, r.bounds.fn_max);
+  EXPECT_EQ(one.hr_columns->mean, r.hr_columns->mean);
+  for (int k = 0; k < Nc; ++k)
+    if (r.probes[k]) EXPECT_EQ(one.probes[k]->f_crit, r.probes[k]->f_crit) << "contact " << k;
+}
+
+TEST(EnsembleRun, NoProbeAndQuantiles) {
+  EnsembleSettings s = lp_hit_and_run(2);
+  s.probe = "none";
+  s.hit_and_run = false;
+  s.walk = false;
+  const EnsembleReport r = compute_ensemble(fixture_p50(), s);
+  EXPECT_EQ(r.probe, "none");
+  EXPECT_TRUE(r.probes.empty());
+  EXPECT_TRUE(r.f_crit_over_fn_max.empty());
+  EXPECT_FALSE(r.hit_and_run || r.walk);
+  EXPECT_EQ(r.bounds.fn_max.size(), r.system.num_contacts());
+  // Linear interpolation between order statistics.
+  EXPECT_EQ(quantile({3.0, 1.0, 2.0}, 0.0), 1.0);
+  EXPECT_EQ(quantile({3.0, 1.0, 2.0}, 0.5), 2.0);
+  EXPECT_EQ(quantile({3.0, 1.0, 2.0, 4.0}, 0.5), 2.5);
+  EXPECT_EQ(quantile({3.0, 1.0, 2.0}, 1.0), 3.0);
+}
+
+}  // namespace
+}  // namespace unjam
