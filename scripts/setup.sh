@@ -6,6 +6,7 @@ packages=(
   libeigen3-dev coinor-libclp-dev libmetis-dev libsuitesparse-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libopenmpi-dev openmpi-bin
+  clang libclang-rt-dev libomp-dev
   python3 python3-matplotlib python3-numpy
   python3-siconos
   python3-dev pybind11-dev python3-pybind11 python3-pytest python3-vtk9 xvfb xauth

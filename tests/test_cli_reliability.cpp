@@ -9,9 +9,12 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -142,6 +145,36 @@ TEST_F(CliReliability, DamagedProbeCheckpointsAreRefusedOrSetAside) {
   EXPECT_GT(refused, 12);
 }
 
+TEST_F(CliReliability, ProbeCheckpointEditedWithItsHashIsCheckedAgainstThePacking) {
+  // A checkpoint whose state was edited and its FNV-1a hash recomputed: the hash only catches
+  // accidental damage, so the state itself must fit the packing. Each edit used to be resumed
+  // (rows out of order or repeated went into probes.csv, a foreign grid into the averages).
+  const fs::path a = copy("p50-mu0.1", "a");
+  const std::string saved = checkpoint_of(a);
+  ASSERT_FALSE(saved.empty()) << "no checkpoint seen";
+  const auto original = nlohmann::json::parse(saved);
+  ASSERT_GE(original.at("state").at("rows").size(), 1u);
+  const std::vector<std::pair<std::string, std::function<void(nlohmann::json&)>>> edits = {
+      {"row repeated", [](nlohmann::json& st) { st["rows"].push_back(st["rows"][0]); }},
+      {"row of other grains", [](nlohmann::json& st) { st["rows"][0][1] = st["rows"][0][1].get<int>() + 1; }},
+      {"contact out of range", [](nlohmann::json& st) { st["rows"][0][0] = 100000; }},
+      {"other grid", [](nlohmann::json& st) { st["average"]["grid"]["r_max"] = 1.5 * st["average"]["grid"]["r_max"].get<double>(); }},
+      {"integer field as a huge float", [](nlohmann::json& st) { st["rows"][0][6] = 1e300; }},
+  };
+  for (const auto& [what, edit] : edits) {
+    SCOPED_TRACE(what);
+    nlohmann::json j = original;
+    edit(j["state"]);
+    j["state_fnv1a64"] = fnv1a64_hex(j["state"].dump());
+    write_file_atomic(a / "probe_checkpoint.json", j.dump());
+    const ToolRun r = run_tool("probe " + a.string() + " --all --threads 1 --quiet");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("probe checkpoint is corrupt"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("remove it to start over"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(a / "probes.csv"));
+  }
+}
+
 TEST_F(CliReliability, ASecondWriterIsRefusedNamingTheFirst) {
   const fs::path d = copy("p50-mu0.1", "d");
   {
@@ -171,6 +204,10 @@ TEST_F(CliReliability, PackKilledDuringCheckpointsResumes) {
   for (int kill = 0; kill < 6; ++kill) {
     const pid_t pid = spawn("pack --n 200 --mu 0.1 --seed 5 --threads 1 --checkpoint 0.001 --quiet --out " +
                             s.string() + (kill == 0 ? "" : " --resume " + s.string()));
+    // The first run is killed only after its first checkpoint (a slow start, e.g. under the
+    // sanitizers, would otherwise leave nothing to resume); up to 120 s.
+    for (int wait = 0; kill == 0 && wait < 12000 && !fs::exists(s / "meta.json"); ++wait)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
     ::kill(pid, SIGKILL);
     int status = 0;

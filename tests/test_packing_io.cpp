@@ -267,6 +267,9 @@ INSTANTIATE_TEST_SUITE_P(
                    {"format_version 99 is newer"}},
         BrokenCase{"WrongN", [](const fs::path& d) { edit_file(d / kM, "\"N\": 50", "\"N\": 51"); },
                    {"N = 51", "50 rows"}},
+        // An integer field holding a float beyond int64's range: was cast (undefined behaviour).
+        BrokenCase{"HugeFloatN", [](const fs::path& d) { edit_file(d / kM, "\"N\": 50", "\"N\": 1e300"); },
+                   {"meta.json: 'N' must be an integer in [", "found 1e+300"}},
         BrokenCase{"MissingColumn", [](const fs::path& d) { edit_file(d / kC, ",fn,", ",f_n,"); },
                    {"contacts.csv: missing column 'fn'"}},
         BrokenCase{"MissingRadius", [](const fs::path& d) { edit_file(d / kP, "radius", "r"); },

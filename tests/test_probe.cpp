@@ -6,9 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
@@ -233,7 +236,7 @@ TEST(ProbeCampaign, StopsAndResumesWithoutRepeatingProbes) {
   ASSERT_LT(part.rows.size(), whole.rows.size());
 
   // Through the JSON checkpoint, as the command line resumes.
-  CampaignState resumed = campaign_state_from_json(to_json(part));
+  CampaignState resumed = campaign_state_from_json(to_json(part), p);
   const std::size_t done = resumed.rows.size();
   int probed_again = 0;
   CampaignHooks count;
@@ -243,6 +246,26 @@ TEST(ProbeCampaign, StopsAndResumesWithoutRepeatingProbes) {
   ASSERT_EQ(resumed.rows.size(), whole.rows.size());
   for (std::size_t i = 0; i < whole.rows.size(); ++i) EXPECT_EQ(resumed.rows[i].f_crit, whole.rows[i].f_crit);
   EXPECT_TRUE(resumed.average == whole.average);
+}
+
+TEST(ProbeCampaign, RecordedIntegerSettingsThatAreHugeFloatsAreRefused) {
+  // meta.json "settings" (read by `probe` and `pack --resume`): a float beyond an integer
+  // setting's range was cast (undefined behaviour) instead of refused.
+  Packing p = fixture_p50();
+  for (const auto& [group, key] : {std::pair{"static", "max_sweeps"}, std::pair{"dynamics", "nlgs_max_sweeps"},
+                                   std::pair{"gas", "N"}, std::pair{"gas", "seed"}}) {
+    SCOPED_TRACE(std::string(group) + "." + key);
+    p.meta.settings = {{group, {{key, 1e300}}}};
+    try {
+      (void)campaign_settings_for(p);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("settings: '") + key + "' must be an integer in ["),
+                std::string::npos) << e.what();
+    }
+  }
+  p.meta.settings = {{"static", {{"max_sweeps", 5000.0}}}};  // integral floats stay accepted
+  EXPECT_NO_THROW((void)campaign_settings_for(p));
 }
 
 TEST(ProbeCampaign, SummaryRatioOfMeans) {

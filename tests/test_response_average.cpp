@@ -3,6 +3,9 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "unjam/analysis/power_law_fit.hpp"
 #include "unjam/analysis/response_average.hpp"
@@ -283,6 +286,39 @@ TEST(ResponseAverage, CheckpointRoundTripIsExact) {
   write_file_atomic(dir / "broken.json", "{\"format\": \"unjam-response-average\"}");
   EXPECT_THROW(ResponseAverage::load(dir / "broken.json"), Error);
   std::filesystem::remove_all(dir);
+}
+
+TEST(ResponseAverage, CheckpointIntegersThatAreHugeFloatsAreRefused) {
+  // Found by fuzz/fuzz_checkpoint_reader: a float where an integer is expected (a 128-bit
+  // sum's parts, a count, a probe id, r_bins) was cast, undefined beyond the type's range.
+  ResponseAverage avg(merge_grid());
+  avg.add_probe(7, random_probe(11), 1e-9);
+  const nlohmann::json good = avg.to_json();
+  ASSERT_TRUE(ResponseAverage::from_json(good) == avg);
+  const std::vector<std::pair<std::string, nlohmann::json::json_pointer>> places = {
+      {"field sum", nlohmann::json::json_pointer("/field/ux_sum/0/1")},
+      {"field sum", nlohmann::json::json_pointer("/field/uy_sum/3/0")},
+      {"field count", nlohmann::json::json_pointer("/field/count/2")},
+      {"probe id", nlohmann::json::json_pointer("/probes/0/id")},
+      {"probe count", nlohmann::json::json_pointer("/probes/0/count/0")},
+      {"r_bins", nlohmann::json::json_pointer("/grid/r_bins")},
+  };
+  for (const auto& [what, where] : places)
+    for (const double huge : {-9.2233720368547758e19, 1e300}) {
+      nlohmann::json j = good;
+      j[where] = huge;
+      SCOPED_TRACE(where.to_string() + " = " + j[where].dump());
+      try {
+        (void)ResponseAverage::from_json(j);
+        ADD_FAILURE() << "accepted";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(what + " must be an integer in ["), std::string::npos) << e.what();
+      }
+    }
+  // An integral float in range stays accepted (tools that write every number as a double).
+  nlohmann::json j = good;
+  j["grid"]["r_bins"] = static_cast<double>(good["grid"]["r_bins"].get<int>());
+  EXPECT_TRUE(ResponseAverage::from_json(j) == avg);
 }
 
 }  // namespace

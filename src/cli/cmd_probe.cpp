@@ -134,31 +134,18 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
 }
 
 // The state an interrupted run saved, if it was made from this packing (its fingerprint) with
-// these settings. One made from another packing (or by a version that did not record it)
-// is set aside as probe_checkpoint.json.stale: its probes do not belong to this packing.
-// One with other settings is refused, as the options may be mistyped; so is a damaged one
-// (its state does not match the FNV-1a hash saved beside it).
-std::optional<CampaignState> saved_state(const fs::path& checkpoint, const std::string& fingerprint,
+// these settings (read_campaign_checkpoint). One made from another packing (or by a version
+// that did not record it) is set aside as probe_checkpoint.json.stale: its probes do not
+// belong to this packing.
+std::optional<CampaignState> saved_state(const fs::path& checkpoint, const Packing& p,
                                          const nlohmann::json& settings) {
   if (!fs::exists(checkpoint)) return std::nullopt;
-  const auto j = nlohmann::json::parse(read_file(checkpoint), nullptr, false);
-  if (j.is_discarded() || !j.is_object())
-    throw Error(checkpoint.string() + " is not valid JSON; remove it to start over");
-  const auto packing = j.find("packing");
-  if (packing == j.end() || *packing != fingerprint) {
-    const fs::path stale = checkpoint.string() + ".stale";
-    rename_file(checkpoint, stale);
-    std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
-                 "starting over\n", checkpoint.c_str(), stale.c_str());
-    return std::nullopt;
-  }
-  if (j.value("settings", nlohmann::json{}) != settings)
-    throw Error(checkpoint.string() + " belongs to a run with other settings; remove it to start over");
-  const auto state = j.find("state");
-  const auto sum = j.find("state_fnv1a64");
-  if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
-    throw Error(checkpoint.string() + " is damaged (its state does not match its checksum); remove it to start over");
-  return campaign_state_from_json(*state);
+  if (auto state = read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings)) return state;
+  const fs::path stale = checkpoint.string() + ".stale";
+  rename_file(checkpoint, stale);
+  std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
+               "starting over\n", checkpoint.c_str(), stale.c_str());
+  return std::nullopt;
 }
 
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
@@ -191,7 +178,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   const nlohmann::json settings_json = to_json(s);
   const std::string fingerprint = packing_fingerprint(p);
   CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
-  if (auto saved = saved_state(checkpoint, fingerprint, settings_json)) {
+  if (auto saved = saved_state(checkpoint, p, settings_json)) {
     state = std::move(*saved);
     std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
   }
@@ -204,12 +191,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   auto last_report = t0, last_checkpoint = t0;
   const std::size_t done_before = state.rows.size();
   const auto save_checkpoint = [&](const CampaignState& st) {
-    const nlohmann::json state_json = to_json(st);
-    write_file_atomic(checkpoint, nlohmann::json{{"packing", fingerprint},
-                                                 {"settings", settings_json},
-                                                 {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
-                                                 {"state", state_json}}
-                                      .dump());
+    write_file_atomic(checkpoint, campaign_checkpoint_text(fingerprint, settings_json, st));
   };
   CampaignHooks hooks;
   hooks.progress = [&](int done, int all) {
@@ -370,7 +352,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
       throw Error("the shards in " + out.string() + " were probed on another packing than " + dir);
     if (j.at("settings") != first.at("settings") || j.at("options") != first.at("options"))
       throw Error("the shards in " + out.string() + " come from runs with other settings");
-    const CampaignState part = campaign_state_from_json(j.at("state"));
+    const CampaignState part = campaign_state_from_json(j.at("state"), p);
     for (const ProbeRow& r : part.rows) state.rows.push_back(r);
     state.average.merge(part.average);
     wall = std::max(wall, j.at("wall_seconds").get<double>());

@@ -5,6 +5,7 @@
 
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 #include "unjam/packing/csv_table.hpp"
 
 namespace unjam {
@@ -202,7 +203,7 @@ nlohmann::json ResponseAverage::to_json() const {
 
 ResponseAverage ResponseAverage::from_json(const nlohmann::json& j) {
   try {
-    if (j.at("format").get<std::string>() != kFormat || j.at("version").get<int>() != kVersion)
+    if (j.at("format").get<std::string>() != kFormat || json_integer<int>(j.at("version"), "version") != kVersion)
       throw Error("response average checkpoint: unknown format or version");
     const nlohmann::json& jg = j.at("grid");
     ResponseGrid grid;
@@ -210,7 +211,7 @@ ResponseAverage ResponseAverage::from_json(const nlohmann::json& j) {
     grid.h = jg.at("h").get<double>();
     grid.r_min = jg.at("r_min").get<double>();
     grid.r_max = jg.at("r_max").get<double>();
-    grid.r_bins = jg.at("r_bins").get<int>();
+    grid.r_bins = json_integer<int>(jg.at("r_bins"), "r_bins");
     ResponseAverage avg(grid);
 
     const nlohmann::json& jf = j.at("field");
@@ -218,16 +219,17 @@ ResponseAverage ResponseAverage::from_json(const nlohmann::json& j) {
     auto read_sums = [&](const nlohmann::json& a, std::vector<FixedPointSum>& out) {
       if (a.size() != bins) throw Error("response average checkpoint: field has the wrong number of bins");
       for (std::size_t b = 0; b < bins; ++b)
-        out[b] = FixedPointSum::from_parts(a.at(b).at(0).get<std::int64_t>(), a.at(b).at(1).get<std::uint64_t>());
+        out[b] = FixedPointSum::from_parts(json_integer<std::int64_t>(a.at(b).at(0), "field sum"),
+                                           json_integer<std::uint64_t>(a.at(b).at(1), "field sum"));
     };
     read_sums(jf.at("ux_sum"), avg.ux_sum_);
     read_sums(jf.at("uy_sum"), avg.uy_sum_);
-    avg.count_ = jf.at("count").get<std::vector<std::int64_t>>();
+    avg.count_ = json_integers<std::int64_t>(jf.at("count"), "field count");
     if (avg.count_.size() != bins) throw Error("response average checkpoint: field has the wrong number of bins");
 
     for (const nlohmann::json& jp : j.at("probes")) {
-      const std::int64_t id = jp.at("id").get<std::int64_t>();
-      ProbeProfile row{jp.at("d_sum").get<std::vector<double>>(), jp.at("count").get<std::vector<std::int64_t>>()};
+      const std::int64_t id = json_integer<std::int64_t>(jp.at("id"), "probe id");
+      ProbeProfile row{jp.at("d_sum").get<std::vector<double>>(), json_integers<std::int64_t>(jp.at("count"), "probe count")};
       if (row.d_sum.size() != static_cast<std::size_t>(grid.r_bins) || row.count.size() != row.d_sum.size())
         throw Error("response average checkpoint: probe " + std::to_string(id) + " has the wrong number of bins");
       if (!avg.profiles_.emplace(id, std::move(row)).second)

@@ -43,11 +43,15 @@ std::optional<Eigen::VectorXd> least_norm_solution(const Eigen::SparseMatrix<dou
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(W0);
   if (ldlt.info() != Eigen::Success) return std::nullopt;
 
-  // Capacitance matrix of the dense part.
-  const Eigen::MatrixXd W0iU = dense.empty() ? Eigen::MatrixXd() : Eigen::MatrixXd(ldlt.solve(U));
-  Eigen::MatrixXd cap = U.transpose() * W0iU;
-  for (Eigen::Index c = 0; c < cap.rows(); ++c) cap(c, c) += 1.0 / D_u[c];
-  const Eigen::LDLT<Eigen::MatrixXd> cap_ldlt(cap);
+  // Capacitance matrix of the dense part (none without dense columns: U has 0 columns).
+  Eigen::MatrixXd W0iU(B.rows(), 0);  // W0^-1 U
+  Eigen::LDLT<Eigen::MatrixXd> cap_ldlt;
+  if (!dense.empty()) {
+    W0iU = ldlt.solve(U);
+    Eigen::MatrixXd cap = U.transpose() * W0iU;
+    for (Eigen::Index c = 0; c < cap.rows(); ++c) cap(c, c) += 1.0 / D_u[c];
+    cap_ldlt.compute(cap);
+  }
   const auto solve_W = [&](const Eigen::VectorXd& r) -> Eigen::VectorXd {
     Eigen::VectorXd z = ldlt.solve(r);
     if (!dense.empty()) z -= W0iU * cap_ldlt.solve(U.transpose() * z);

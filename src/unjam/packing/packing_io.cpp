@@ -8,6 +8,7 @@
 
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/geometry_check.hpp"
@@ -55,9 +56,7 @@ std::string meta_string_or(const json& meta, const std::string& where, const cha
 }
 
 std::int64_t meta_integer(const json& v, const std::string& where, const std::string& key) {
-  if (!v.is_number_integer() && !(v.is_number_float() && v.get<double>() == std::trunc(v.get<double>())))
-    throw Error(where + ": '" + key + "' must be an integer, found " + v.dump());
-  return v.get<std::int64_t>();
+  return json_integer<std::int64_t>(v, where + ": '" + key + "'");
 }
 
 struct MetaFile {
@@ -328,6 +327,29 @@ void check_contact_geometry(const Packing& p, const CsvTable& contacts) {
   }
 }
 
+// The packing of the three files' texts; meta_path names meta.json (or meta.json.new) in messages.
+Packing parse_files(const std::string& meta_text, std::string particles_text, std::string contacts_text,
+                    const fs::path& dir, const fs::path& meta_path) {
+  Packing p;
+  const MetaFile meta = read_meta(meta_path, meta_text, p);
+  for (const auto& [file, text] : {std::pair{kParticles, &particles_text}, std::pair{kContacts, &contacts_text}})
+    if (!matches_checksum(meta.meta, meta_path.string(), file, *text))
+      throw Error((dir / file).string() +
+                  " does not match meta.json: the packing was modified or its write was interrupted");
+
+  const CsvTable particles = CsvTable::parse(std::move(particles_text), (dir / kParticles).string());
+  if (meta.N && *meta.N != static_cast<std::int64_t>(particles.rows()))
+    throw Error((dir / kMeta).string() + ": N = " + std::to_string(*meta.N) + " but " + kParticles + " has " +
+                std::to_string(particles.rows()) + " rows");
+  read_particles(particles, p);
+  check_packing_fraction(p, dir / kMeta);
+
+  const CsvTable contacts = CsvTable::parse(std::move(contacts_text), (dir / kContacts).string());
+  read_contacts(contacts, p);
+  check_contact_geometry(p, contacts);
+  return p;
+}
+
 }  // namespace
 
 Packing read_packing(const fs::path& dir) {
@@ -350,24 +372,12 @@ Packing read_packing(const fs::path& dir) {
     f.contacts_text = read_file(f.contacts_path);
   }
 
-  Packing p;
-  const MetaFile meta = read_meta(f.meta_path, f.meta_text, p);
-  for (const auto& [file, text] : {std::pair{kParticles, &f.particles_text}, std::pair{kContacts, &f.contacts_text}})
-    if (!matches_checksum(meta.meta, f.meta_path.string(), file, *text))
-      throw Error((dir / file).string() +
-                  " does not match meta.json: the packing was modified or its write was interrupted");
+  return parse_files(f.meta_text, std::move(f.particles_text), std::move(f.contacts_text), dir, f.meta_path);
+}
 
-  const CsvTable particles = CsvTable::parse(std::move(f.particles_text), (dir / kParticles).string());
-  if (meta.N && *meta.N != static_cast<std::int64_t>(particles.rows()))
-    throw Error((dir / kMeta).string() + ": N = " + std::to_string(*meta.N) + " but " + kParticles + " has " +
-                std::to_string(particles.rows()) + " rows");
-  read_particles(particles, p);
-  check_packing_fraction(p, dir / kMeta);
-
-  const CsvTable contacts = CsvTable::parse(std::move(f.contacts_text), (dir / kContacts).string());
-  read_contacts(contacts, p);
-  check_contact_geometry(p, contacts);
-  return p;
+Packing parse_packing(const std::string& meta_text, std::string particles_text, std::string contacts_text,
+                      const fs::path& dir) {
+  return parse_files(meta_text, std::move(particles_text), std::move(contacts_text), dir, dir / kMeta);
 }
 
 void write_packing(const fs::path& dir, const Packing& p) {

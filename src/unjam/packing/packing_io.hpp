@@ -20,6 +20,11 @@ inline constexpr int kPackingFormatVersion = 1;
 // do not fit the positions: packing/geometry_check.hpp).
 Packing read_packing(const std::filesystem::path& dir);
 
+// The same checks on the texts of meta.json, particles.csv and contacts.csv; `dir` only names
+// the files in messages (nothing is read from disk).
+Packing parse_packing(const std::string& meta_text, std::string particles_text, std::string contacts_text,
+                      const std::filesystem::path& dir);
+
 // Writes the packing into `dir` (created if needed), replacing the previous version as a
 // whole: a write stopped at any point leaves one complete version on disk, the previous or
 // the new one, which read_packing finds (docs/packing-format.md). Temporary files left by

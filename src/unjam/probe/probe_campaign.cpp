@@ -10,7 +10,10 @@
 #include <random>
 
 #include "unjam/analysis/contact_frame.hpp"
+#include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
+#include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/protocol/settings_json.hpp"
@@ -289,18 +292,81 @@ nlohmann::json to_json(const CampaignState& state) {
   return {{"rows", rows}, {"average", state.average.to_json()}};
 }
 
-CampaignState campaign_state_from_json(const nlohmann::json& j) {
+namespace {
+
+// campaign_state_from_json without the message's prefix.
+CampaignState parse_campaign_state(const nlohmann::json& j, const Packing& p) {
+  const ResponseGrid grid = ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius());
+  if (!j.is_object()) throw Error("the state is not a JSON object");
+  ResponseAverage average = ResponseAverage::from_json(j.at("average"));
+  if (!(average.grid() == grid)) throw Error("its averages are not on this packing's grid");
+  CampaignState state(grid);
+  state.average = std::move(average);
+  const auto contacts = static_cast<int>(p.contacts.size());
+  for (const auto& r : j.at("rows")) {
+    if (!r.is_array() || r.size() != 10) throw Error("a row is not an array of 10 values");
+    const ProbeRow row{json_integer<int>(r[0], "row contact"),   json_integer<int>(r[1], "row grain a"),
+                       json_integer<int>(r[2], "row grain b"),     r[3].get<double>(),
+                       r[4].get<double>(),                        r[5].get<bool>(),
+                       json_integer<long long>(r[6], "row sweeps"), r[7].get<double>(),
+                       json_integer<int>(r[8], "row violations"), r[9].get<double>()};
+    if (row.contact < 0 || row.contact >= contacts)
+      throw Error("contact " + std::to_string(row.contact) + " out of range (the packing has " +
+                  std::to_string(contacts) + " contacts)");
+    if (!state.rows.empty() && !(state.rows.back().contact < row.contact))
+      throw Error("the rows are not in increasing contact order (contact " + std::to_string(row.contact) + ")");
+    const Contact& c = p.contacts[row.contact];
+    if (row.a != c.a || row.b != c.b)
+      throw Error("contact " + std::to_string(row.contact) + " is between grains " + std::to_string(c.a) + " and " +
+                  std::to_string(c.b) + ", not " + std::to_string(row.a) + " and " + std::to_string(row.b));
+    state.rows.push_back(row);
+  }
+  std::vector<char> listed(p.contacts.size(), 0);
+  for (const ProbeRow& row : state.rows) listed[row.contact] = 1;
+  for (const auto& [id, profile] : state.average.probe_profiles())
+    if (id < 0 || id >= contacts || !listed[id])
+      throw Error("the averages hold probe " + std::to_string(id) + ", which has no row");
+  return state;
+}
+
+}  // namespace
+
+CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p) {
   try {
-    CampaignState state(ResponseAverage::from_json(j.at("average")).grid());
-    state.average = ResponseAverage::from_json(j.at("average"));
-    for (const auto& r : j.at("rows"))
-      state.rows.push_back({r.at(0).get<int>(), r.at(1).get<int>(), r.at(2).get<int>(),
-                            r.at(3).get<double>(), r.at(4).get<double>(), r.at(5).get<bool>(),
-                            r.at(6).get<long long>(), r.at(7).get<double>(), r.at(8).get<int>(),
-                            r.at(9).get<double>()});
-    return state;
+    return parse_campaign_state(j, p);
   } catch (const nlohmann::json::exception& e) {
     throw Error(std::string("probe checkpoint is corrupt: ") + e.what());
+  } catch (const Error& e) {
+    throw Error(std::string("probe checkpoint is corrupt: ") + e.what());
+  }
+}
+
+std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
+                                     const CampaignState& state) {
+  const nlohmann::json state_json = to_json(state);
+  return nlohmann::json{{"packing", fingerprint},
+                        {"settings", settings},
+                        {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
+                        {"state", state_json}}
+      .dump();
+}
+
+std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
+                                                      const Packing& p, const nlohmann::json& settings) {
+  const auto j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) throw Error(name + " is not valid JSON; remove it to start over");
+  const auto packing = j.find("packing");
+  if (packing == j.end() || *packing != packing_fingerprint(p)) return std::nullopt;
+  if (j.value("settings", nlohmann::json{}) != settings)
+    throw Error(name + " belongs to a run with other settings; remove it to start over");
+  const auto state = j.find("state");
+  const auto sum = j.find("state_fnv1a64");
+  if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
+    throw Error(name + " is damaged (its state does not match its checksum); remove it to start over");
+  try {
+    return campaign_state_from_json(*state, p);
+  } catch (const Error& e) {
+    throw Error(name + ": " + e.what() + "; remove it to start over");
   }
 }
 

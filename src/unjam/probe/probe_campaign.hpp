@@ -120,6 +120,23 @@ CampaignSummary summarize(const Packing& packing, const CampaignState& state,
 
 nlohmann::json to_json(const CampaignSettings& settings);
 nlohmann::json to_json(const CampaignState& state);
-CampaignState campaign_state_from_json(const nlohmann::json& j);
+
+// A state saved from `packing` (to_json): throws unjam::Error unless it is one run_campaign
+// could have made on it: the averages on the packing's grid
+// (ResponseGrid::for_cell(cell, 2 <R>)), rows in strictly increasing contact order with the
+// packing's grains a-b, probe ids of the averages among the rows' contacts.
+CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& packing);
+
+// A probe checkpoint as `unjam probe --all` saves it: the packing's fingerprint
+// (packing_fingerprint, passed in as computing it costs O(N)), the settings (to_json), the state and the FNV-1a hash of its dump.
+std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
+                                     const CampaignState& state);
+
+// The state of a checkpoint's text, if it was saved from `packing` (nullopt if from another
+// packing, or without a fingerprint). Throws unjam::Error (naming `name`) if the text is not a
+// JSON object, the settings differ, the state does not match its hash, or the state does not
+// fit the packing (campaign_state_from_json).
+std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
+                                                      const Packing& packing, const nlohmann::json& settings);
 
 }  // namespace unjam

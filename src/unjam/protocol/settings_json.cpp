@@ -1,6 +1,7 @@
 #include "unjam/protocol/settings_json.hpp"
 
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 
 namespace unjam {
 namespace {
@@ -9,7 +10,10 @@ template <class T>
 void read(const nlohmann::json& j, const char* key, T& value) {
   if (!j.contains(key)) return;
   try {
-    value = j.at(key).get<T>();
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>)
+      value = json_integer<T>(j.at(key), std::string("settings: '") + key + "'");
+    else
+      value = j.at(key).get<T>();
   } catch (const nlohmann::json::exception&) {
     throw Error(std::string("settings: '") + key + "' has the wrong type");
   }
