@@ -127,12 +127,20 @@ TEST_F(Distributed, ProbeKilledOnTwoRanksResumesOnThree) {
 
   const std::string job = "exec env " + unjam(2, args + out.string() + "' --checkpoint 0") + " >/dev/null 2>&1";
   const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
+  // The job in a process group of its own, killed as a whole (mpirun and the ranks it
+  // started, as a node failure would): killing mpirun alone lets the ranks finish the
+  // remaining probes before they notice.
+  posix_spawnattr_t attr;
+  ASSERT_EQ(::posix_spawnattr_init(&attr), 0);
+  ASSERT_EQ(::posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP), 0);
+  ASSERT_EQ(::posix_spawnattr_setpgroup(&attr, 0), 0);
   pid_t pid = 0;
-  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, &attr, const_cast<char**>(argv), environ), 0);
+  ::posix_spawnattr_destroy(&attr);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (checkpointed_rows(out) < 10 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  ::kill(pid, SIGKILL);
+  ::kill(-pid, SIGKILL);
   ::waitpid(pid, nullptr, 0);
   // The ranks notice that mpirun is gone and exit; wait for them before resuming (the
   // bracket keeps pgrep's own shell from matching).
