@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -105,22 +106,28 @@ inline void check_frictionless(int N, std::uint64_t seed) {
   for (const Contact& k : compacted(N, 0.0, seed).packing.contacts) EXPECT_EQ(k.ft, 0.0);
 }
 
+// A frictional packing's check_static plus its expected ranges of phi and z.
+inline Measured check_frictional(int N, double mu, std::uint64_t seed, double phi_lo, double phi_hi,
+                                 double z_lo, double z_hi, std::string& label) {
+  std::ostringstream name;
+  name << "N " << N << " mu " << mu << " seed " << seed;
+  label = name.str();
+  const Measured m = check_static(compacted(N, mu, seed), mu, label);
+  EXPECT_GE(m.phi, phi_lo) << label;
+  EXPECT_LE(m.phi, phi_hi) << label;
+  EXPECT_GE(m.z, z_lo) << label;
+  EXPECT_LE(m.z, z_hi) << label;
+  return m;
+}
+
 inline void check_mu01(int N, std::uint64_t seed) {
-  const std::string label = "N " + std::to_string(N) + " mu 0.1 seed " + std::to_string(seed);
-  const Measured m = check_static(compacted(N, 0.1, seed), 0.1, label);
-  EXPECT_GE(m.phi, 0.80) << label;
-  EXPECT_LE(m.phi, 0.845) << label;
-  EXPECT_GE(m.z, 3.3) << label;
-  EXPECT_LE(m.z, 3.85) << label;
+  std::string label;
+  check_frictional(N, 0.1, seed, 0.80, 0.845, 3.3, 3.85, label);
 }
 
 inline void check_mu1(int N, std::uint64_t seed) {
-  const std::string label = "N " + std::to_string(N) + " mu 1 seed " + std::to_string(seed);
-  const Measured m = check_static(compacted(N, 1.0, seed), 1.0, label);
-  EXPECT_GE(m.phi, 0.77) << label;
-  EXPECT_LE(m.phi, 0.82) << label;
-  EXPECT_GE(m.z, 2.9) << label;
-  EXPECT_LE(m.z, 3.3) << label;
+  std::string label;
+  const Measured m = check_frictional(N, 1.0, seed, 0.77, 0.82, 2.9, 3.3, label);
   // Hypostatic with respect to the frictionless count, hyperstatic w.r.t. friction (3N'-1).
   EXPECT_LT(m.force_carrying, 2 * m.non_rattlers - 1) << label;
 }

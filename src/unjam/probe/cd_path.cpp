@@ -201,6 +201,8 @@ class StepPath {
   }
 
   int factorizations() const { return stats_factorizations_; }
+  // A fresh factorisation forced by an inaccurate updated solve failed (the solution is NaN).
+  bool singular() const { return singular_; }
 
   // x(lambda) = x0 + lambda x1 of the current states.
   void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) {
@@ -332,7 +334,10 @@ class StepPath {
       if (omega <= kMaxBackwardError) return z;
       if (refinement == 0) z += updated_solve(r);
     }
-    if (!factorize()) return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
+    if (!factorize()) {
+      singular_ = true;
+      return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
+    }
     return lu_.solve(y);
   }
 
@@ -352,15 +357,13 @@ class StepPath {
   std::pair<Eigen::VectorXd, double> backward_error(const Eigen::VectorXd& y, const Eigen::VectorXd& z) const {
     Eigen::VectorXd r = y - S_ * z;
     Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cwiseAbs();
-    for (std::size_t i = 0; i < rows_.size(); ++i) {
-      double sum = 0.0, abs_sum = 0.0;
-      for (const auto& [col, v] : D_[i]) sum += v * z[col];
-      r[rows_[i]] -= sum;
-      // |S| of a changed row: its entries in the present state (D holds the present entries
-      // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
-      for (const auto& [col, v] : D_[i]) abs_sum += std::abs(v * z[col]);
-      scale[rows_[i]] += abs_sum;
-    }
+    // |S| of a changed row: its entries in the present state (D holds the present entries
+    // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
+    for (std::size_t i = 0; i < rows_.size(); ++i)
+      for (const auto& [col, v] : D_[i]) {
+        r[rows_[i]] -= v * z[col];
+        scale[rows_[i]] += std::abs(v * z[col]);
+      }
     double omega = 0.0;
     for (Eigen::Index i = 0; i < r.size(); ++i)
       if (scale[i] > 0.0) omega = std::max(omega, std::abs(r[i]) / scale[i]);
@@ -410,6 +413,7 @@ class StepPath {
   std::vector<std::vector<std::pair<int, double>>> D_;
   Eigen::PartialPivLU<Eigen::MatrixXd> capacitance_;
   int stats_factorizations_ = 0;
+  bool singular_ = false;
   Eigen::SparseMatrix<double> S_abs_;  // |S_b|, entrywise
   static constexpr double kMaxBackwardError = 1e-14;
 };
@@ -460,6 +464,10 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
       return false;
     }
     path.solve(x0, x1);
+    if (path.singular()) {
+      stats.failure = "singular";
+      return false;
+    }
     path.displacements(x0, x1);
     if (sigma * path.freed_slope(e.contact, previous, x0, x1) < 0.0) sigma = -sigma;
   }
@@ -503,26 +511,28 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   // of their own (StepPath::proximal_step), while that lowers the step's residual.
   sol.f = path.forces(x0 + x1);
   sol.residual = cd_step_residual(pb, sol.f);
+  std::vector<State> states = path.states();  // those of sol.f
   for (int r = 0; r < ps.refinements && sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
     path.proximal_step(sol.f);
     path.solve(x0, x1);
     path.displacements(x0, x1);
     ++stats.refinements;
     CdPathStats proximal;
-    if (!follow_path(path, pb, ps, x0, x1, proximal)) break;
+    const bool reached = follow_path(path, pb, ps, x0, x1, proximal);
     stats.pieces += proximal.pieces;
     stats.degenerate += proximal.degenerate;
+    if (!reached) break;
     const Eigen::VectorXd f = path.forces(x0 + x1);
     const CdStepResidual res = cd_step_residual(pb, f);
     if (!(res.max() < sol.residual.max())) break;
     sol.f = f;
     sol.residual = res;
+    states = path.states();
   }
   stats.factorizations += path.factorizations();
   for (int k = 0; k < nc; ++k) {
-    const State s = path.states()[k];
-    if (s == State::kOpen && k != contact) ++stats.open;
-    if (s == State::kSlidePlus || s == State::kSlideMinus) ++stats.sliding;
+    if (states[k] == State::kOpen && k != contact) ++stats.open;
+    if (states[k] == State::kSlidePlus || states[k] == State::kSlideMinus) ++stats.sliding;
   }
   return sol;
 }
