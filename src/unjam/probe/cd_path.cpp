@@ -322,23 +322,39 @@ class StepPath {
     if (a_p_[r] != 0.0 && active_in(r, s)) out.emplace_back(2 * nc_, sign * a_p_[r]);
   }
 
-  // S^-1 y by the factors of S_b and the rows changed since (see set_state), with one step
-  // of iterative refinement where the componentwise backward error
+  using VectorXld = Eigen::Matrix<long double, Eigen::Dynamic, 1>;
+
+  // S^-1 y by the factors of S_b and the rows changed since (see set_state), refined
+  // iteratively with residuals y - S z accumulated in extended precision (long double,
+  // 64-bit mantissa on x86-64), so that z is accurate to working precision while
+  // cond(S) eps_double < 1. A hyperstatic sticking set leaves S only regularised by the
+  // compliance, cond(S) ~ 1 / compliance; without it the forces carry errors ~1e-6 F0
+  // along the set's self-stresses, and the events read from them are inconsistent
+  // (docs/probe.md, "Accuracy of the pieces"). Where the componentwise backward error
   //     omega = max_i |S z - y|_i / (|S| |z| + |y|)_i
-  // exceeds kMaxBackwardError; where it still does, S is factorised afresh and solved again.
-  Eigen::VectorXd solve_reduced(const Eigen::VectorXd& y) {
-    Eigen::VectorXd z = updated_solve(y);
-    if (rows_.empty()) return z;
-    for (int refinement = 0; refinement < 2; ++refinement) {
-      const auto [r, omega] = backward_error(y, z);
-      if (omega <= kMaxBackwardError) return z;
-      if (refinement == 0) z += updated_solve(r);
-    }
+  // still exceeds kMaxBackwardError, S is factorised afresh and the solve refined again.
+  Eigen::VectorXd solve_reduced(const VectorXld& y) {
+    Eigen::VectorXd z = updated_solve(y.cast<double>());
+    double omega = refine(y, z);
+    if (rows_.empty() || omega <= kMaxBackwardError) return z;
     if (!factorize()) {
       singular_ = true;
       return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
     }
-    return lu_.solve(y);
+    z = lu_.solve(y.cast<double>());
+    refine(y, z);
+    return z;
+  }
+
+  // Up to kRefinements steps z += S^-1 (y - S z) until the correction is below 1e-15 |z|;
+  // returns omega of the refined z.
+  double refine(const VectorXld& y, Eigen::VectorXd& z) const {
+    for (int step = 0; step < kRefinements; ++step) {
+      const Eigen::VectorXd dz = updated_solve(backward_error(y, z).first);
+      z += dz;
+      if (!(dz.lpNorm<Eigen::Infinity>() > 1e-15 * z.lpNorm<Eigen::Infinity>())) break;
+    }
+    return backward_error(y, z).second;
   }
 
   // z = S^-1 y by Woodbury's formula on the factors of S_b.
@@ -353,22 +369,26 @@ class StepPath {
     return z;
   }
 
-  // The residual y - S z and omega (see solve_reduced).
-  std::pair<Eigen::VectorXd, double> backward_error(const Eigen::VectorXd& y, const Eigen::VectorXd& z) const {
-    Eigen::VectorXd r = y - S_ * z;
-    Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cwiseAbs();
+  // The residual y - S z, accumulated in long double, and omega (see solve_reduced).
+  std::pair<Eigen::VectorXd, double> backward_error(const VectorXld& y, const Eigen::VectorXd& z) const {
+    VectorXld r = y;
+    for (int j = 0; j < S_.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(S_, j); it; ++it)
+        r[it.row()] -= static_cast<long double>(it.value()) * z[j];
+    Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cast<double>().cwiseAbs();
     // |S| of a changed row: its entries in the present state (D holds the present entries
     // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
     for (std::size_t i = 0; i < rows_.size(); ++i)
       for (const auto& [col, v] : D_[i]) {
-        r[rows_[i]] -= v * z[col];
+        r[rows_[i]] -= static_cast<long double>(v) * z[col];
         scale[rows_[i]] += std::abs(v * z[col]);
       }
+    const Eigen::VectorXd rd = r.cast<double>();
     double omega = 0.0;
-    for (Eigen::Index i = 0; i < r.size(); ++i)
-      if (scale[i] > 0.0) omega = std::max(omega, std::abs(r[i]) / scale[i]);
-      else if (r[i] != 0.0) omega = std::numeric_limits<double>::infinity();
-    return {r, omega};
+    for (Eigen::Index i = 0; i < rd.size(); ++i)
+      if (scale[i] > 0.0) omega = std::max(omega, std::abs(rd[i]) / scale[i]);
+      else if (rd[i] != 0.0) omega = std::numeric_limits<double>::infinity();
+    return {rd, omega};
   }
 
   // The full system K x = r, x = (v, f), by the reduced one: v_G = M_G^-1 (r_G + A_G f),
@@ -376,17 +396,24 @@ class StepPath {
   // r_r - a_r^T M_G^-1 r_G, and the pressure row m_p v_p - a_p^T f = r_p stays as it is.
   Eigen::VectorXd solve_full(const Eigen::VectorXd& r) {
     const int p = n_ - 1;
-    Eigen::VectorXd t = pb_.inverse_mass.cwiseProduct(r.head(n_));
-    t[p] = 0.0;
-    const Eigen::VectorXd At = pb_.system.A.transpose() * t;
-    Eigen::VectorXd y(2 * nc_ + 1);
-    for (int i = 0; i < 2 * nc_; ++i) y[i] = r[n_ + i] - (active(i) ? At[i] : 0.0);
+    // y in extended precision: a_r^T M_G^-1 r_G is of the order of the loads (F0 / m),
+    // the kinematic terms of g / dt^2; rounded to double, the difference would carry an
+    // error that S^-1 amplifies by cond(S) (see solve_reduced).
+    VectorXld y = VectorXld::Zero(2 * nc_ + 1);
+    const Eigen::SparseMatrix<double>& A = pb_.system.A;
+    for (int j = 0; j < A.outerSize(); ++j)
+      if (active(j))
+        for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
+          if (it.row() != p)
+            y[j] -= static_cast<long double>(it.value()) *
+                    (static_cast<long double>(pb_.inverse_mass[it.row()]) * r[it.row()]);
+    for (int i = 0; i < 2 * nc_; ++i) y[i] += r[n_ + i];
     y[2 * nc_] = r[p];
-    y = solve_reduced(y);
+    const Eigen::VectorXd z = solve_reduced(y);
     Eigen::VectorXd x(n_ + 2 * nc_);
-    x.tail(2 * nc_) = y.head(2 * nc_);
-    x.head(n_) = pb_.inverse_mass.cwiseProduct(r.head(n_) + pb_.system.A * y.head(2 * nc_));
-    x[p] = y[2 * nc_];
+    x.tail(2 * nc_) = z.head(2 * nc_);
+    x.head(n_) = pb_.inverse_mass.cwiseProduct(r.head(n_) + A * z.head(2 * nc_));
+    x[p] = z[2 * nc_];
     return x;
   }
 
@@ -416,6 +443,7 @@ class StepPath {
   bool singular_ = false;
   Eigen::SparseMatrix<double> S_abs_;  // |S_b|, entrywise
   static constexpr double kMaxBackwardError = 1e-14;
+  static constexpr int kRefinements = 2;  // extended-precision refinement steps per solve
 };
 
 // A 64-bit hash of the state set and the direction (collisions: ~pieces^2 / 2^64).
