@@ -17,7 +17,7 @@
 // (strict complementarity). The field's unilateral conditions (open contacts do not close,
 // sliding contacts slip against their friction force) are checked, not imposed.
 #include "unjam/contact/equilibrium_matrix.hpp"
-#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_result.hpp"
 
