@@ -1,4 +1,4 @@
-// The local perturbation probe (PHYSICS.md section 6): the paper's contact-dynamics probe
+// The local perturbation probe (docs/probe.md): the paper's contact-dynamics probe
 // against the linear-programming bound, its independence of g, its kinematics, and the
 // campaign over many contacts (determinism, stop and resume).
 #include <gtest/gtest.h>

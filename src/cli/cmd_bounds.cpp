@@ -1,5 +1,5 @@
 // `unjam bounds DIR`: the exact interval [fn_min, fn_max] of every contact's normal force over
-// the admissible force networks (PHYSICS.md section 7, docs/ensemble.md), by LP.
+// the admissible force networks (docs/ensemble.md), by LP.
 // Writes DIR/bounds.csv (a,b,fn,fn_min,fn_max; 17 significant digits, force units of the
 // packing) and DIR/bounds.json (dimension, rank, contacts, timings, parameters, version).
 #include <omp.h>

@@ -1,6 +1,6 @@
 // `unjam pack`: compacts a gas of disks under the pressure bath into a static packing
-// (PHYSICS.md section 5), or continues from an existing packing: resume a stopped run in
-// place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
+// (docs/method.md, "Compaction"), or continues from an existing packing: resume a stopped run
+// in place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
 #include <omp.h>
 
 #include <cstdio>

@@ -1,4 +1,4 @@
-// `unjam probe DIR`: the local perturbation probe (PHYSICS.md section 6). One contact
+// `unjam probe DIR`: the local perturbation probe (docs/probe.md, "The probe"). One contact
 // (--contact K: F_crit and the displacement of every grain) or every force-carrying contact
 // (--all, or --sample K of them), each from the same static packing, with the averages of
 // the paper's Figs. 1 and 2 and the decay exponent alpha.

@@ -224,7 +224,8 @@ py::array u_view(py::object self) {
 }
 
 void bind_probe_result(py::module_& m) {
-  py::class_<ProbeResult>(m, "ProbeResult", "what one probe measures (PHYSICS.md section 6)")
+  py::class_<ProbeResult>(m, "ProbeResult",
+                          "what one probe measures (docs/probe.md, \"The probe\")")
       .def_readonly("contact", &ProbeResult::contact)
       .def_readonly("a", &ProbeResult::a)
       .def_readonly("b", &ProbeResult::b)
