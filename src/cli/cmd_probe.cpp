@@ -19,6 +19,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -217,7 +218,7 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
   const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
                             {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}}},
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
-                            {"wall_seconds", wall}, {"ranks", rank_loads_json(dist.loads())}};
+                            {"wall_seconds", wall}, {"ranks", rank_loads_json<nlohmann::json>(dist.loads(), "probes")}};
   write_file_atomic(file, j.dump());
   std::printf("shard %s: %zu probes of %s in %s -> %s (merge the shards with `unjam merge`)\n",
               o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(wall).c_str(),
@@ -241,7 +242,7 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   summary["method"] = o.method;
   summary["g"] = o.g;
   summary["wall_seconds"] = wall;
-  summary["ranks"] = rank_loads_json(loads);
+  summary["ranks"] = rank_loads_json<nlohmann::json>(loads, "probes");
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
 
   std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),

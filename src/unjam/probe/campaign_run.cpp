@@ -87,11 +87,4 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
   return j;
 }
 
-nlohmann::json rank_loads_json(const std::vector<RankLoad>& loads) {
-  nlohmann::json j = nlohmann::json::array();
-  for (const RankLoad& l : loads)
-    j.push_back({{"rank", l.rank}, {"threads", l.threads}, {"probes", l.tasks}, {"busy_seconds", l.busy_seconds}});
-  return j;
-}
-
 }  // namespace unjam

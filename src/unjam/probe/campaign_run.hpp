@@ -7,7 +7,6 @@
 #include <functional>
 #include <optional>
 #include <string>
-#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -66,8 +65,5 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
 // samples), or fit_error when there is none.
 nlohmann::json campaign_summary_json(const Packing& packing, const PackingStats& stats,
                                      const CampaignSummary& summary);
-
-// Per MPI rank or process: rank, threads, probes and busy seconds (summed over threads).
-nlohmann::json rank_loads_json(const std::vector<RankLoad>& loads);
 
 }  // namespace unjam
