@@ -24,7 +24,7 @@
 
 #include "scenes.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
-#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 

@@ -69,7 +69,7 @@ double packing_fraction(const Packing& p);
 std::string verify_static(const Packing& p, int N, double mu, std::uint64_t seed,
                           PackingStats* stats = nullptr);
 
-// (L / d)^2 with d the mean diameter: the NLGS sweep scale of PHYSICS.md section 3.
+// (L / d)^2 with d the mean diameter: the NLGS sweep scale (docs/method.md, "The static solve").
 double L_over_d_squared(const Packing& p);
 
 }  // namespace unjam::bench

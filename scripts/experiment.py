@@ -20,8 +20,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json);
   figures      fig3-friction-sweep.png, fig2-profiles.png (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
-  report       OUT/report.md: measured values per mu beside the paper's findings (PHYSICS.md
-               section 9), agree / disagree per finding, parameters, timings, figures.
+  report       OUT/report.md: measured values per mu beside the paper's findings
+               (docs/results/README.md), agree / disagree per finding, parameters, timings, figures.
 
 Caching and resume: every stage records its command and parameters in a stage.json next to its
 output (a packing directory holds the records of its pack and probe stages; OUT/stage.json those

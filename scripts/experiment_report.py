@@ -108,7 +108,7 @@ def write_report(path, args, cfg, R, figures, command):
         for (mu, n), a in fixed_agg.items():
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
-    L += ["", f"## Against the paper (PHYSICS.md section 9; measured at N = {n_max})", "",
+    L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
           "| finding | paper | measured | verdict |", "|---|---|---|---|"]
     for f, paper, meas, verdict in findings(agg, fixed_agg, n_max):
         L.append(f"| {f} | {paper} | {meas} | **{verdict}** |")

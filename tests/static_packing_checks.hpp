@@ -1,9 +1,9 @@
 #pragma once
-// The checks every static packing made by compact() must pass (PHYSICS.md sections 4, 5, 7,
-// 8), shared by the physics tests (test_static_packing.cpp) and the validation runs
-// (test_validation.cpp): force and torque balance of every grain computed from the contact
-// list, Coulomb, no tension, the pressure, overlaps, completeness of the contact list, and
-// packing fraction and coordination per mu.
+// The checks every static packing made by compact() must pass (docs/method.md, "Compaction";
+// docs/analysis.md, "Static measurements of a packing"), shared by the physics tests
+// (test_static_packing.cpp) and the validation runs (test_validation.cpp): force and torque
+// balance of every grain computed from the contact list, Coulomb, no tension, the pressure,
+// overlaps, completeness of the contact list, and packing fraction and coordination per mu.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// The pressure bath (PHYSICS.md section 4): the cell strain rate follows
+// The pressure bath (docs/method.md, "One time step"): the cell strain rate follows
 // M_lambda dlambda/dt = P_in - P_ext; a gas under P_ext compresses until P_in = P_ext.
 // Also the validation of the compaction settings and of the gas.
 #include <gtest/gtest.h>

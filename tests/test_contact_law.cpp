@@ -1,5 +1,5 @@
-// The contact law of one contact-dynamics step (PHYSICS.md section 3), checked on a single
-// pair with solve_nlgs against impulses computed by hand: open, closing with a gap,
+// The contact law of one contact-dynamics step (docs/method.md, "One time step"), checked on a
+// single pair with solve_nlgs against impulses computed by hand: open, closing with a gap,
 // sticking, sliding, the torque signs and the minimum image.
 #include <gtest/gtest.h>
 

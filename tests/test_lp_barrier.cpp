@@ -13,8 +13,8 @@
 #include <coin/ClpSimplex.hpp>
 
 #include "fixture_p50.hpp"
-#include "unjam/ensemble/lp_barrier.hpp"
-#include "unjam/ensemble/normal_equations.hpp"
+#include "unjam/lp/lp_barrier.hpp"
+#include "unjam/lp/normal_equations.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// The local perturbation probe (PHYSICS.md section 6): the paper's contact-dynamics probe
+// The local perturbation probe (docs/probe.md): the paper's contact-dynamics probe
 // against the linear-programming bound, its independence of g, its kinematics, and the
 // campaign over many contacts (determinism, stop and resume).
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/error.hpp"
-#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"

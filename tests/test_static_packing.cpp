@@ -1,4 +1,4 @@
-// Static packings made by compact() (PHYSICS.md sections 4, 5, 7, 8): the checks of
+// Static packings made by compact() (docs/method.md, "Compaction"): the checks of
 // static_packing_checks.hpp (balance, Coulomb, no tension, pressure, overlaps, a complete
 // contact list, isostaticity at mu = 0, packing fraction and coordination per mu) on N = 100
 // and 200, and a golden value. More seeds and larger N: test_validation.cpp.

@@ -42,7 +42,7 @@ TEST(StaticPackingValidation, Mu1) {
 
 TEST(StaticPackingValidation, FrictionlessNetworkIsUniqueExactlyWhenIsostatic) {
   // mu = 0: the static network is unique when the packing is isostatic (force-carrying
-  // contacts = 2N' - 1, PHYSICS.md section 6): a static solve from zero forces with another
+  // contacts = 2N' - 1, docs/probe.md, "The probe"): a static solve from zero forces with another
   // seed must find the same forces. A packing with extra contacts (N = 200 seed 1 has one:
   // a pair overlapping by ~1e-4 counts as touching) has a family of networks instead: the
   // admissible set has dimension >= 1, and the solve may land anywhere in it.

@@ -1,5 +1,5 @@
 // `unjam bounds DIR`: the exact interval [fn_min, fn_max] of every contact's normal force over
-// the admissible force networks (PHYSICS.md section 7, docs/ensemble.md), by LP.
+// the admissible force networks (docs/ensemble.md), by LP.
 // Writes DIR/bounds.csv (a,b,fn,fn_min,fn_max; 17 significant digits, force units of the
 // packing) and DIR/bounds.json (dimension, rank, contacts, timings, parameters, version).
 #include <omp.h>
@@ -23,6 +23,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -69,13 +70,6 @@ ForceBoundsOptions lp_options(const BoundsOptions& opt, int Nc) {
     };
   }
   return lp;
-}
-
-nlohmann::ordered_json loads_json(const std::vector<RankLoad>& loads) {
-  nlohmann::ordered_json j = nlohmann::ordered_json::array();
-  for (const RankLoad& l : loads)
-    j.push_back({{"rank", l.rank}, {"threads", l.threads}, {"lps", l.tasks}, {"busy_seconds", l.busy_seconds}});
-  return j;
 }
 
 // bounds.csv: one row per contact of the system (17 significant digits, force units).
@@ -128,7 +122,7 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
       {"timings_s",
        {{"read_and_build", run.t_build}, {"rank", run.t_rank}, {"lp", bounds.seconds},
         {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", run.t_total}}},
-      {"ranks", loads_json(run.loads)},
+      {"ranks", rank_loads_json<nlohmann::ordered_json>(run.loads, "lps")},
   };
 }
 

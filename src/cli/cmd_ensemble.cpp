@@ -1,8 +1,8 @@
-// `unjam ensemble DIR`: the admissible force networks of a packing (PHYSICS.md section 7,
-// docs/ensemble.md) sampled by hit-and-run (uniform) and/or by the paper's random walk of
-// kicks relaxed by contact dynamics, the exact LP interval of every contact, and the
-// critical force F_crit of every force-carrying contact (section 6): everything the
-// paper's Fig. 4 draws (scripts/plot_fig4.py).
+// `unjam ensemble DIR`: the admissible force networks of a packing (docs/ensemble.md) sampled
+// by hit-and-run (uniform) and/or by the paper's random walk of kicks relaxed by contact
+// dynamics, the exact LP interval of every contact, and the critical force F_crit of every
+// force-carrying contact (docs/probe.md): everything the paper's Fig. 4 draws
+// (scripts/plot_fig4.py).
 // Writes
 //   DIR/ensemble.csv   one row per contact of the admissible set (force units of the
 //                      packing, shortest round-trip decimals):

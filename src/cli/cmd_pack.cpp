@@ -1,21 +1,22 @@
 // `unjam pack`: compacts a gas of disks under the pressure bath into a static packing
-// (PHYSICS.md section 5), or continues from an existing packing: resume a stopped run in
-// place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
+// (docs/method.md, "Compaction"), or continues from an existing packing: resume a stopped run
+// in place (--resume DIR) or re-relax a packing at another mu or P_ext (--from DIR --out NEW).
 #include <omp.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "cli/run_info.hpp"
-#include "unjam/analysis/packing_stats.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/protocol/compaction.hpp"
 #include "unjam/protocol/gas.hpp"
+#include "unjam/protocol/pack_run.hpp"
 #include "unjam/protocol/settings_json.hpp"
 
 namespace unjam::cli {
@@ -58,18 +59,18 @@ void check_memory(const PackOptions& o, std::size_t N) {
   if (!o.quiet && need > 1e9) std::fprintf(stderr, "memory estimate: %s\n", format_bytes(need).c_str());
 }
 
-void run(PackOptions& o) {
-  Packing p;
-  std::filesystem::path out = o.out;
+// The packing to compact and where it goes; nullopt if a run to resume is already static.
+std::optional<Packing> start_packing(PackOptions& o, std::filesystem::path& out) {
+  out = o.out;
   if (o.resume.empty() && o.from.empty()) check_memory(o, static_cast<std::size_t>(std::max(o.gas.N, 0)));
+  Packing p;
   if (!o.resume.empty()) {
     // Continue in place with the settings the run was started with.
-    p = read_packing(o.resume);
-    from_json(p.meta.settings, o.compaction, o.gas);
+    p = stopped_packing(o.resume, o.compaction, o.gas);
     out = o.resume;
     if (p.state.is_static) {
       std::fprintf(stderr, "%s is already static; nothing to do\n", o.resume.c_str());
-      return;
+      return std::nullopt;
     }
   } else {
     if (o.out.empty()) throw Error("--out is required (or --resume DIR)");
@@ -77,15 +78,14 @@ void run(PackOptions& o) {
       p = read_packing(o.from);
       prepare_relaxation(p, o.mu, o.P_ext, o.compaction, o.gas);
     } else {
-      p = make_gas(o.gas);
-      p.meta.mu = o.mu;
-      p.meta.P_ext = o.P_ext;
+      p = gas_packing(o.gas, o.mu, o.P_ext);
     }
   }
   prepare_compaction(p, o.compaction, o.gas, o.command);
-  if (o.threads > 0) omp_set_num_threads(o.threads);
+  return p;
+}
 
-  const DirLock lock(out, o.command);
+CompactionHooks compaction_hooks(const PackOptions& o, const std::filesystem::path& out) {
   CompactionHooks hooks;
   if (!o.quiet) {
     hooks.progress = print_progress;
@@ -97,26 +97,14 @@ void run(PackOptions& o) {
                    static_cast<long long>(step), v, r.max_residual_F0, r.sweeps);
     };
   }
-  hooks.checkpoint = [&](const Packing& q) { write_packing(out, q); };
+  hooks.checkpoint = [out](const Packing& q) { write_packing(out, q); };
   hooks.checkpoint_s = o.checkpoint_s;
   hooks.should_stop = InterruptGuard::requested;
+  return hooks;
+}
 
-  const InterruptGuard interrupts;
-  std::fprintf(stderr, "unjam pack: N = %zu, mu = %g, P_ext = %g, threads = %d -> %s\n", p.size(),
-               p.meta.mu, p.meta.P_ext, omp_get_max_threads(), out.c_str());
-  const CompactionResult r = compact(p, o.compaction, hooks);
-  write_packing(out, p);
-
-  if (!r.is_static) {
-    std::fprintf(stderr,
-                 "%s after %lld steps; the packing is not static yet and was saved to %s\n"
-                 "resume with: unjam pack --resume %s\n",
-                 r.stopped ? "stopped" : "step limit reached", static_cast<long long>(r.steps),
-                 out.c_str(), out.c_str());
-    if (r.stopped) throw Interrupted("state saved to " + out.string() + "; resume with: unjam pack --resume " + out.string());
-    throw Error("no static packing within --max-steps");
-  }
-  const PackingStats s = compute_packing_stats(p);
+void print_report(const std::filesystem::path& out, const CompactionResult& r, const PackReport& report) {
+  const PackingStats& s = report.stats;
   std::printf("static packing written to %s\n", out.c_str());
   std::printf("  N %zu  mu %g  phi %.4f  z %.3f  rattlers %zu  contacts carrying force %zu\n", s.N,
               s.mu, s.phi, s.z, s.rattlers, s.N_c);
@@ -133,9 +121,35 @@ void run(PackOptions& o) {
   }
   std::printf("  %lld steps, %lld sweeps (%.1f per step), %d static solve attempt(s), %s wall, "
               "%.1f M contact updates/s\n",
-              static_cast<long long>(r.steps), static_cast<long long>(r.sweeps),
-              static_cast<double>(r.sweeps) / std::max<std::int64_t>(1, r.steps), r.static_attempts,
-              format_duration(r.wall_s).c_str(), r.contact_updates / std::max(r.wall_s, 1e-9) / 1e6);
+              static_cast<long long>(r.steps), static_cast<long long>(r.sweeps), report.sweeps_per_step,
+              r.static_attempts, format_duration(r.wall_s).c_str(), report.updates_per_s / 1e6);
+}
+
+void run(PackOptions& o) {
+  std::filesystem::path out;
+  std::optional<Packing> start = start_packing(o, out);
+  if (!start) return;
+  Packing& p = *start;
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+
+  const DirLock lock(out, o.command);
+  const CompactionHooks hooks = compaction_hooks(o, out);
+  const InterruptGuard interrupts;
+  std::fprintf(stderr, "unjam pack: N = %zu, mu = %g, P_ext = %g, threads = %d -> %s\n", p.size(),
+               p.meta.mu, p.meta.P_ext, omp_get_max_threads(), out.c_str());
+  const CompactionResult r = compact(p, o.compaction, hooks);
+  write_packing(out, p);
+
+  if (!r.is_static) {
+    std::fprintf(stderr,
+                 "%s after %lld steps; the packing is not static yet and was saved to %s\n"
+                 "resume with: unjam pack --resume %s\n",
+                 r.stopped ? "stopped" : "step limit reached", static_cast<long long>(r.steps),
+                 out.c_str(), out.c_str());
+    if (r.stopped) throw Interrupted("state saved to " + out.string() + "; resume with: unjam pack --resume " + out.string());
+    throw Error("no static packing within --max-steps");
+  }
+  print_report(out, r, pack_report(p, r));
 }
 
 }  // namespace

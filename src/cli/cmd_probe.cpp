@@ -1,4 +1,4 @@
-// `unjam probe DIR`: the local perturbation probe (PHYSICS.md section 6). One contact
+// `unjam probe DIR`: the local perturbation probe (docs/probe.md, "The probe"). One contact
 // (--contact K: F_crit and the displacement of every grain) or every force-carrying contact
 // (--all, or --sample K of them), each from the same static packing, with the averages of
 // the paper's Figs. 1 and 2 and the decay exponent alpha.
@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "cli/commands.hpp"
@@ -18,11 +19,13 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
+#include "unjam/probe/campaign_run.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 #include "unjam/protocol/compaction.hpp"
 #include "unjam/protocol/gas.hpp"
@@ -133,21 +136,6 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
   return FitWindow{o.fit_window[0], o.fit_window[1]};
 }
 
-// The state an interrupted run saved, if it was made from this packing (its fingerprint) with
-// these settings (read_campaign_checkpoint). One made from another packing (or by a version
-// that did not record it) is set aside as probe_checkpoint.json.stale: its probes do not
-// belong to this packing.
-std::optional<CampaignState> saved_state(const fs::path& checkpoint, const Packing& p,
-                                         const nlohmann::json& settings) {
-  if (!fs::exists(checkpoint)) return std::nullopt;
-  if (auto state = read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings)) return state;
-  const fs::path stale = checkpoint.string() + ".stale";
-  rename_file(checkpoint, stale);
-  std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
-               "starting over\n", checkpoint.c_str(), stale.c_str());
-  return std::nullopt;
-}
-
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
                      const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
                      const fs::path& out);
@@ -156,11 +144,33 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
 
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
 void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist) {
-  CampaignState unused(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  CampaignState unused = empty_campaign_state(p);
   CampaignHooks hooks;
   hooks.should_stop = InterruptGuard::requested;
   const InterruptGuard interrupts;
   run_campaign(p, s, unused, hooks, dist);
+}
+
+// The state a stopped run saved to `checkpoint`, or an empty one (probe/campaign_run).
+CampaignState start_state(const fs::path& checkpoint, const Packing& p, const nlohmann::json& settings_json) {
+  SavedCampaign saved = load_campaign_checkpoint(checkpoint, p, settings_json);
+  if (!saved.set_aside.empty())
+    std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
+                 "starting over\n", checkpoint.c_str(), saved.set_aside.c_str());
+  if (!saved.state) return empty_campaign_state(p);
+  std::fprintf(stderr, "resuming: %zu probes already done\n", saved.state->rows.size());
+  return std::move(*saved.state);
+}
+
+// Progress and ETA on stderr, at most every 2 s and at the end (none with --quiet).
+std::function<void(int, int, double, double)> progress_printer(const ProbeOptions& o) {
+  if (o.quiet) return {};
+  return [last = 0.0](int done, int all, double elapsed, double eta) mutable {
+    if (elapsed - last < 2.0 && done < all) return;
+    last = elapsed;
+    std::fprintf(stderr, "probes %d / %d (%.1f %%)  elapsed %s  ETA ~%s\n", done, all,
+                 100.0 * done / std::max(all, 1), format_duration(elapsed).c_str(), format_duration(eta).c_str());
+  };
 }
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
@@ -174,70 +184,32 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   if (!dist->gathers()) return run_worker(p, s, *dist);
   const auto lock = lock_output(out, shard, shards);
   const std::string part = shards > 1 ? "-shard-" + std::to_string(shard) + "-of-" + std::to_string(shards) : "";
-  const fs::path checkpoint = out / ("probe_checkpoint" + part + ".json");
-  const nlohmann::json settings_json = to_json(s);
-  const std::string fingerprint = packing_fingerprint(p);
-  CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
-  if (auto saved = saved_state(checkpoint, p, settings_json)) {
-    state = std::move(*saved);
-    std::fprintf(stderr, "resuming: %zu probes already done\n", state.rows.size());
-  }
+  CheckpointedCampaignOptions run;
+  run.checkpoint = out / ("probe_checkpoint" + part + ".json");
+  run.settings = to_json(s);
+  run.fingerprint = packing_fingerprint(p);
+  run.checkpoint_s = o.checkpoint_s;
+  run.stop_after = o.stop_after;
+  run.interrupted = InterruptGuard::requested;
+  run.progress = progress_printer(o);
+  CampaignState state = start_state(run.checkpoint, p, run.settings);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
   std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads%s\n", total,
                o.dir.c_str(), o.method.c_str(), omp_get_max_threads(), spread.c_str());
-
-  const auto t0 = std::chrono::steady_clock::now();
-  auto last_report = t0, last_checkpoint = t0;
-  const std::size_t done_before = state.rows.size();
-  const auto save_checkpoint = [&](const CampaignState& st) {
-    write_file_atomic(checkpoint, campaign_checkpoint_text(fingerprint, settings_json, st));
-  };
-  CampaignHooks hooks;
-  hooks.progress = [&](int done, int all) {
-    const auto now = std::chrono::steady_clock::now();
-    if (o.quiet || (std::chrono::duration<double>(now - last_report).count() < 2.0 && done < all)) return;
-    last_report = now;
-    const double el = std::chrono::duration<double>(now - t0).count();
-    const double rate = (done - static_cast<double>(done_before)) / std::max(el, 1e-9);
-    std::fprintf(stderr, "probes %d / %d (%.1f %%)  elapsed %s  ETA ~%s\n", done, all,
-                 100.0 * done / std::max(all, 1), format_duration(el).c_str(),
-                 format_duration(rate > 0 ? (all - done) / rate : -1).c_str());
-  };
-  hooks.checkpoint = [&](const CampaignState& st) {
-    const auto now = std::chrono::steady_clock::now();
-    if (std::chrono::duration<double>(now - last_checkpoint).count() < o.checkpoint_s && !InterruptGuard::requested()) return;
-    last_checkpoint = now;
-    save_checkpoint(st);
-  };
-  hooks.should_stop = [&] {
-    return InterruptGuard::requested() ||
-           (o.stop_after > 0 && state.rows.size() >= done_before + o.stop_after);
-  };
-  bool finished = false;
+  CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
-    finished = run_campaign(p, s, state, hooks, *dist);
+    r = run_checkpointed_campaign(p, s, state, *dist, run);
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!finished) {
-    save_checkpoint(state);
+  if (!r.finished)
     throw Interrupted("stopped after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
-  }
   if (shards > 1)
-    write_shard(o, fingerprint, settings_json, state, wall, *dist, out / shard_file_name("probe_shard", shard, shards));
+    write_shard(o, run.fingerprint, run.settings, state, r.wall_s, *dist, out / shard_file_name("probe_shard", shard, shards));
   else
-    finish_campaign(o, p, settings_json, state, wall, dist->loads(), out);
-  fs::remove(checkpoint);
-}
-
-// The JSON of per-rank loads (tasks and compute time of each MPI rank or process).
-nlohmann::json loads_json(const std::vector<RankLoad>& loads) {
-  nlohmann::json j = nlohmann::json::array();
-  for (const RankLoad& l : loads)
-    j.push_back({{"rank", l.rank}, {"threads", l.threads}, {"probes", l.tasks}, {"busy_seconds", l.busy_seconds}});
-  return j;
+    finish_campaign(o, p, run.settings, state, r.wall_s, dist->loads(), out);
+  fs::remove(run.checkpoint);
 }
 
 // A finished shard: its state, what merge needs to write the outputs, its own run.
@@ -246,7 +218,7 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
   const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
                             {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}}},
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
-                            {"wall_seconds", wall}, {"ranks", loads_json(dist.loads())}};
+                            {"wall_seconds", wall}, {"ranks", rank_loads_json<nlohmann::json>(dist.loads(), "probes")}};
   write_file_atomic(file, j.dump());
   std::printf("shard %s: %zu probes of %s in %s -> %s (merge the shards with `unjam merge`)\n",
               o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(wall).c_str(),
@@ -262,35 +234,15 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
   write_file_atomic(out / "response_field.csv", state.average.field_csv());
   write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
-  nlohmann::json summary = {
-      {"program_version", kVersion},
-      {"command", command_line()},
-      {"packing", o.dir},
-      {"seed", p.meta.seed},
-      {"N", p.size()},
-      {"mu", p.meta.mu},
-      {"phi", stats.phi},
-      {"z", stats.z},
-      {"F0", p.force_unit()},
-      {"probes", sum.probes},
-      {"not_converged", sum.not_converged},
-      {"F_cont_over_F0", sum.F_cont_over_F0},
-      {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
-      {"settings", settings_json},
-      {"method", o.method},
-      {"g", o.g},
-      {"wall_seconds", wall},
-      {"ranks", loads_json(loads)},
-  };
-  if (sum.has_fit) {
-    summary["alpha"] = sum.fit.alpha;
-    summary["alpha_err"] = sum.fit.alpha_err;
-    summary["fit"] = {{"r_lo", sum.fit.r_lo}, {"r_hi", sum.fit.r_hi}, {"bins", sum.fit.bins},
-                      {"R2", sum.fit.R2}, {"log_A", sum.fit.log_A},
-                      {"bootstrap_samples", sum.fit.bootstrap_samples}};
-  } else {
-    summary["fit_error"] = sum.fit_error;
-  }
+  nlohmann::json summary = campaign_summary_json(p, stats, sum);
+  summary["program_version"] = kVersion;
+  summary["command"] = command_line();
+  summary["packing"] = o.dir;
+  summary["settings"] = settings_json;
+  summary["method"] = o.method;
+  summary["g"] = o.g;
+  summary["wall_seconds"] = wall;
+  summary["ranks"] = rank_loads_json<nlohmann::json>(loads, "probes");
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
 
   std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),
@@ -343,7 +295,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   o.method = first.at("options").at("method").get<std::string>();
   o.g = first.at("options").at("g").get<double>();
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
-  CampaignState state(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  CampaignState state = empty_campaign_state(p);
   std::vector<RankLoad> loads;
   double wall = 0.0;
   const std::string fingerprint = packing_fingerprint(p);

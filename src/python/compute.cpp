@@ -22,6 +22,7 @@
 #include "unjam/probe/probe_campaign.hpp"
 #include "unjam/protocol/compaction.hpp"
 #include "unjam/protocol/gas.hpp"
+#include "unjam/protocol/pack_run.hpp"
 #include "unjam/protocol/settings_json.hpp"
 
 namespace unjam::python {
@@ -100,9 +101,7 @@ Packing run_compaction(Packing p, const PackArgs& a) {
 
 // `unjam pack --n ... --out OUT`: a gas compacted into a static packing.
 Packing pack(PackArgs a) {
-  Packing p = make_gas(a.gas);
-  p.meta.mu = a.mu;
-  p.meta.P_ext = a.P_ext;
+  Packing p = gas_packing(a.gas, a.mu, a.P_ext);
   prepare_compaction(p, a.compaction, a.gas, call_record(true, a));
   return run_compaction(std::move(p), a);
 }
@@ -224,7 +223,8 @@ py::array u_view(py::object self) {
 }
 
 void bind_probe_result(py::module_& m) {
-  py::class_<ProbeResult>(m, "ProbeResult", "what one probe measures (PHYSICS.md section 6)")
+  py::class_<ProbeResult>(m, "ProbeResult",
+                          "what one probe measures (docs/probe.md, \"The probe\")")
       .def_readonly("contact", &ProbeResult::contact)
       .def_readonly("a", &ProbeResult::a)
       .def_readonly("b", &ProbeResult::b)

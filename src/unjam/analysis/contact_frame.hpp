@@ -1,5 +1,6 @@
 #pragma once
-// The contact frame of a probed contact (PHYSICS.md section 8, the paper's Fig. 1).
+// The contact frame of a probed contact (docs/analysis.md, "Contact frame"; the
+// paper's Fig. 1).
 //
 // For the probed contact c = (a, b) with normal n (from a to b, the direction in which the
 // probe separates the pair) and tangent t = (-n_y, n_x):

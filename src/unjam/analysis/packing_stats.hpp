@@ -1,5 +1,6 @@
 #pragma once
-// Static measurements of a packing (PHYSICS.md section 8) and the checks of a static state:
+// Static measurements of a packing (docs/analysis.md, "Static
+// measurements of a packing") and the checks of a static state:
 // packing fraction, coordination, rattlers, mean contact force, overlaps, force and torque
 // balance of every grain, P_in against P_ext, Coulomb condition.
 //

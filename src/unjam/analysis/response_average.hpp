@@ -1,7 +1,8 @@
 #pragma once
-// Averages of the probe response over probed contacts (PHYSICS.md section 8; the paper's
-// Figs. 1 and 2). Every probe contributes its per-grain displacement field, mapped into the
-// probed contact's frame (contact_frame.hpp) and divided by the probe's gap g:
+// Averages of the probe response over probed contacts (docs/analysis.md, "Mean field" and
+// "Profile d(r)"; the paper's Figs. 1 and 2). Every probe contributes its per-grain
+// displacement field, mapped into the probed contact's frame (contact_frame.hpp) and divided by
+// the probe's gap g:
 //
 // Mean field (Fig. 1). A square grid over the frame, [-W, W)^2 with W = half_width, n_side =
 // 2W/h bins of side h; bin (i, j) covers x in [-W + i h, -W + (i+1) h), y likewise. Per bin:

@@ -1,5 +1,6 @@
 #pragma once
-// The balance rows of a fixed contact geometry (PHYSICS.md section 7).
+// The balance rows of a fixed contact geometry (docs/ensemble.md, "Which contacts and
+// rows enter").
 //
 // Unknowns: the forces (fn_k, ft_k) of the contacts that enter, columns 2k and 2k + 1.
 // Rows, three per grain i that has a contact in the list (block g = position of i in `grains`):

@@ -1,5 +1,5 @@
 #pragma once
-// Units of the model (PHYSICS.md section 1). Length: the largest radius R_max = 1.
+// Units of the model (docs/method.md, "Model and units"). Length: the largest radius R_max = 1.
 // Areal mass density rho = 1. Pressure: P_ext (default 1).
 #include <numbers>
 

@@ -1,98 +1,20 @@
 #pragma once
 // Exact per-contact intervals of the normal force over the admissible force networks
-// (PHYSICS.md section 7):
+// (docs/ensemble.md, "The LP"):
 //   [fn_min_k, fn_max_k] = [min, max] fn_k  over  { A x = rhs, fn >= 0, |ft| <= mu fn }
-// with A the balance and pressure rows of equilibrium_matrix.hpp. Each end is a linear
-// program, solved with COIN-OR CLP in Coulomb-cone coordinates y >= 0 (the Coulomb cone and
-// fn >= 0 become plain column bounds, the only rows are the equalities). The model is built
-// once; each further LP changes only the objective (LpMethod says how it is re-solved).
-// fn_max_k is the bound on the critical force F_crit of contact k (PHYSICS.md section 6).
+// with A the balance and pressure rows of equilibrium_matrix.hpp, each end one LP of
+// lp/force_lp.hpp. fn_max_k is the bound on the critical force F_crit of contact k
+// (docs/probe.md, "The fast method").
 #include <functional>
-#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/work_source.hpp"
-#include "unjam/ensemble/lp_barrier.hpp"
-
-class ClpSimplex;
+#include "unjam/lp/force_lp.hpp"
 
 namespace unjam {
-
-// One admissible force network, per contact of the system (force units of the packing).
-struct ForceNetwork {
-  Eigen::VectorXd fn, ft;
-};
-
-// Classifies every contact of a network by contact_state (packing/contact.hpp).
-std::vector<ContactState> contact_states(const ForceNetwork& network, double mu, double tol);
-
-// How each LP is solved (timings in docs/ensemble.md):
-//   barrier  CLP's interior-point method without crossover, every LP from scratch with one
-//            shared symbolic analysis (lp_barrier.hpp, normal_equations.hpp). Its cost grows
-//            like one sparse Cholesky per iteration; the fastest at every size measured.
-//            The optimal network it returns lies inside the optimal face.
-//   simplex  primal simplex warm-started from the previous optimal basis (one model for the
-//            minima, one for the maxima; dual simplex measured no faster: CLP falls back to
-//            primal because a changed objective leaves the basis dual infeasible). The
-//            optimal network is a vertex. Pivots per LP grow with the system size (the
-//            optimal bases of two contacts differ over the whole packing), so the time per
-//            contact grows about like N^2.
-enum class LpMethod { barrier, simplex };
-
-// Loads the admissible set into `model` in cone coordinates: columns y >= 0 (the Coulomb
-// cone and fn >= 0), rows A_y y = rhs (Ay = cone_matrix(system)), a zero objective, no log,
-// primal and dual tolerance `tolerance` (see ForceLP). The model ForceLP solves.
-void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay,
-                         const Eigen::VectorXd& rhs, double tolerance);
-
-// The LP over the admissible set of one system, re-solved for one objective after another.
-// Copyable: each copy owns its own CLP models and bases (one per thread).
-class ForceLP {
- public:
-  // Builds the model and finds a first admissible network (barrier, or dual simplex). Throws
-  // unjam::Error ("no admissible force network: ...") when the set is empty.
-  // `tolerance`: CLP's primal and dual feasibility tolerance (absolute, on the scaled model).
-  // 1e-9 is the tested value; far below it (1e-13 on p50) CLP's barrier ends some LPs
-  // "optimal" at wrong points.
-  explicit ForceLP(const EquilibriumSystem& system, LpMethod method = LpMethod::barrier,
-                   double tolerance = 1e-9);
-  ForceLP(const ForceLP& other);
-  ForceLP& operator=(const ForceLP&) = delete;
-  ~ForceLP();
-
-  // min / max of fn_k over the admissible set (k: position in system.contacts).
-  double min_fn(int k);
-  double max_fn(int k);
-
-  // The optimal network of the last solve (an argmin / argmax of the last objective).
-  ForceNetwork network() const;
-
-  // Simplex and barrier iterations summed over every solve of this object (a copy starts
-  // from 0).
-  long long iterations() const { return iterations_; }
-  // Barrier solves that stalled and ended optimal at looser tolerances (BarrierEnd), over
-  // every solve of this object (a copy starts from 0), and whether the last one did.
-  long long loosened_solves() const { return loosened_solves_; }
-  bool last_solve_loosened() const { return last_loosened_; }
-
- private:
-  double optimize(int k, double direction);
-
-  const EquilibriumSystem* system_;
-  LpMethod method_;
-  BarrierSolver barrier_;  // keeps the Cholesky analysis of A_y across solves
-  std::unique_ptr<ClpSimplex> min_model_, max_model_;  // the same LP, one basis per sense
-  ClpSimplex* last_ = nullptr;                         // model of the last solve
-  int per_contact_;  // cone columns per contact (2 if mu > 0, else 1)
-  // The contact whose fn is each model's current objective (-1: none, zero objective).
-  int min_objective_ = -1, max_objective_ = -1;
-  long long iterations_ = 0;
-  long long loosened_solves_ = 0;
-  bool last_loosened_ = false;
-};
 
 struct ForceBounds;
 

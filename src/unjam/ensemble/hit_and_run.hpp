@@ -1,5 +1,6 @@
 #pragma once
-// Uniform sampling of the admissible force networks (PHYSICS.md section 7) by hit-and-run.
+// Uniform sampling of the admissible force networks (docs/ensemble.md, "The admissible
+// force networks") by hit-and-run.
 //
 // The polytope is { y >= 0 : A_y y = rhs } in Coulomb-cone coordinates (equilibrium_matrix.hpp);
 // uniform in y is uniform in (fn, ft). Contacts whose LP maximum is zero (fn_max <= fixed_tol

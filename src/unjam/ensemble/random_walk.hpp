@@ -1,7 +1,7 @@
 #pragma once
-// The paper's exploration of the admissible force networks (PHYSICS.md section 7; Unger,
-// Kertesz, Wolf, cond-mat/0403089): a random walk of kicks, each relaxed back into the
-// admissible set by the contact-dynamics solver at fixed geometry.
+// The paper's exploration of the admissible force networks (docs/ensemble.md, "The paper's
+// random walk and Fig. 4"; Unger, Kertesz, Wolf, cond-mat/0403089): a random walk of kicks,
+// each relaxed back into the admissible set by the contact-dynamics solver at fixed geometry.
 //
 // Start: the packing's own network on the contacts of the admissible set (`system`). Step:
 //   1. kick: fn_k += U(-a, a), ft_k += U(-a, a) for every contact of the set, with the

@@ -1,6 +1,6 @@
 #pragma once
 // Per-contact statistics of the normal forces of sampled admissible networks, shared by the
-// samplers (hit_and_run, random_walk), and the indeterminacy of [C]:
+// samplers (hit_and_run, random_walk), and the indeterminacy (docs/ensemble.md, "The sampler"):
 //   eta = <dF> / <|F|>,  dF_k the standard deviation of fn_k over the ensemble,
 //   <.> the mean over contacts (|F| also over samples).
 #include <Eigen/Core>

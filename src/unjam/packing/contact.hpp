@@ -2,7 +2,7 @@
 // One contact of the packing: the plain data shared by the solvers, the static checks,
 // the linear programs and the probe (one row of contacts.csv).
 //
-// Sign conventions (PHYSICS.md section 2):
+// Sign conventions (docs/method.md, "Model and units"):
 //   l = r_b - r_a (minimum image), n = l / |l|, t = (-n_y, n_x),
 //   gap = |l| - R_a - R_b (negative: overlap),
 //   the force on b is fn n + ft t, the force on a is -(fn n + ft t); fn >= 0 is compressive,

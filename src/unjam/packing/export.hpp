@@ -16,7 +16,7 @@
 namespace unjam {
 
 // A per-grain displacement field exported with the packing, e.g. one probe's
-// (PHYSICS.md section 6): u (length units), u / g and the rotation (radians) of every grain.
+// (docs/probe.md, "The probe"): u (length units), u / g and the rotation (radians) of every grain.
 struct GrainDisplacement {
   std::vector<Vec2> u;
   std::vector<Vec2> u_over_g;

@@ -1,7 +1,8 @@
 #pragma once
-// The fast probe (PHYSICS.md sections 6 and 7). In the small-g, negligible-inertia limit the
-// forces at the end of the probe are statically admissible, so the critical force is the
-// largest admissible normal force of the contact:
+// The fast probe (docs/probe.md, "The fast method"; the admissible set: docs/ensemble.md, "The
+// admissible force networks"). In the small-g, negligible-inertia limit the forces at the end
+// of the probe are statically admissible, so the critical force is the largest admissible
+// normal force of the contact:
 //     F_crit(c) = max fn_c over { A f = rhs, fn >= 0, |ft| <= mu fn }    (a linear program).
 // At that optimum the contacts that are open (fn = 0) and sliding (|ft| = mu fn) are known;
 // every other contact keeps its surfaces together. The displacement field is then the
@@ -17,7 +18,7 @@
 // (strict complementarity). The field's unilateral conditions (open contacts do not close,
 // sliding contacts slip against their friction force) are checked, not imposed.
 #include "unjam/contact/equilibrium_matrix.hpp"
-#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_result.hpp"
 

@@ -1,5 +1,6 @@
 #pragma once
-// The paper's probe by plain contact dynamics (PHYSICS.md section 6): one time step from
+// The paper's probe by plain contact dynamics (docs/probe.md, "The reference
+// method"): one time step from
 // the static packing (velocities zero, forces R0 as warm start, pressure bath on) in which
 // the probed contact's Signorini condition is shifted by g: its surfaces must separate by g
 // during the step (g_eff = -g; friction as usual). Every other touching pair keeps

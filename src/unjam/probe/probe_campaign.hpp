@@ -1,9 +1,10 @@
 #pragma once
 // Probing every contact of a packing, one by one, always from the same static packing
-// (PHYSICS.md sections 6 and 8): the probes run in parallel (one probe per thread at a time),
-// the per-grain displacement fields go straight into the averages (mean field in the
-// contact frame and d(r)), and only one row per probe is kept. A campaign can stop and
-// resume: its state (rows and averages) is saved as JSON and finished probes are skipped.
+// (docs/probe.md, "The probe"; the averages: docs/analysis.md): the probes run in parallel (one
+// probe per thread at a time), the per-grain displacement fields go straight into the averages
+// (mean field in the contact frame and d(r)), and only one row per probe is kept. A campaign
+// can stop and resume: its state (rows and averages) is saved as JSON and finished probes are
+// skipped.
 #include <cstdint>
 #include <functional>
 #include <optional>

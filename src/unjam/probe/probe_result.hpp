@@ -1,5 +1,5 @@
 #pragma once
-// What a local perturbation probe measures (PHYSICS.md section 6).
+// What a local perturbation probe measures (docs/probe.md, "The probe").
 #include <limits>
 #include <vector>
 

@@ -1,11 +1,11 @@
 #pragma once
-// The compaction protocol (PHYSICS.md section 5): integrate the packing under the pressure
+// The compaction protocol (docs/method.md, "Compaction"): integrate the packing under the pressure
 // bath until it is static. The dynamics runs with a loose NLGS tolerance; once the
 // force-carrying grains have nearly stopped and P_in ~ P_ext, a static force solve at the
 // fixed geometry decides: if it reaches the residual target the packing is static (its
 // network balances every grain with P_in = P_ext, velocities set to zero), else the
 // dynamics goes on. An attempt may take attempt_budget (L / d)^2 sweeps (NLGS needs ~(L/d)^2
-// sweeps to carry a rigid response across the cell, PHYSICS.md section 3), and the next one
+// sweeps to carry a rigid response across the cell, docs/method.md), and the next one
 // waits until the dynamics has spent as many sweeps or the loaded grains have slowed down
 // three times.
 #include <cstddef>

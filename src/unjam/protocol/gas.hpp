@@ -1,5 +1,5 @@
 #pragma once
-// The initial state of the compaction (PHYSICS.md section 5): a gas of N disks, radii
+// The initial state of the compaction (docs/method.md, "Compaction"): a gas of N disks, radii
 // uniform in [R_min, R_max], placed at random without overlap in a square periodic cell
 // of packing fraction phi_gas, all at rest.
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
 // Exact completion of a static force solve. NLGS reaches the static network only slowly
-// (the error decays over ~(L/d)^2 sweeps, PHYSICS.md section 3), but it finds the active set
+// (the error decays over ~(L/d)^2 sweeps, docs/method.md), but it finds the active set
 // early: which contacts are open (fn = 0), sliding (|ft| = mu fn) or sticking. With the
 // active set fixed, balance is a linear system. The polish makes the smallest change to
 // the forces that satisfies it exactly:

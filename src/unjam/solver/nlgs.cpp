@@ -56,7 +56,7 @@ struct Sweeper {
   double K = 0.0;       // sum_i m_i |v_i|^2
   double lambda = 0.0;  // current iterate of the cell strain rate
   double V = 1.0;
-  double R_avg = 0.0;   // mean |R| of the previous sweep (absolute criterion of [D])
+  double R_avg = 0.0;   // mean |R| of the previous sweep (absolute criterion of kForceChange)
 
   double pressure() const { return (S + K) / (2.0 * V); }
 
@@ -112,7 +112,7 @@ struct Sweeper {
     t.dK += (A.vx * A.vx + A.vy * A.vy - KA) / A.inv_m + (B.vx * B.vx + B.vy * B.vy - KB) / B.inv_m;
     t.dS += dRn * r.len;
     t.max_dU = std::max(t.max_dU, dt * std::max(std::abs(dRn) * r.inv_mn, std::abs(dRt) * r.inv_mt));
-    // Force-change criteria of [D].
+    // Force-change criteria of kForceChange (nlgs.hpp).
     const double d2 = dRn * dRn + dRt * dRt;
     const double s2 = (Rn + r.Rn) * (Rn + r.Rn) + (Rt + r.Rt) * (Rt + r.Rt);
     if (d2 <= set.tol * s2) ++t.rel_ok;

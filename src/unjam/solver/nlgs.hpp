@@ -1,5 +1,6 @@
 #pragma once
-// Nonlinear Gauss-Seidel for the contact problem of one time step (PHYSICS.md section 3).
+// Nonlinear Gauss-Seidel for the contact problem of one time step (docs/method.md,
+// "One time step").
 //
 // Each contact is solved in closed form given the forces of all others (open, sticking or
 // sliding), and its force change is applied to the two velocities at once. Contacts are
@@ -17,11 +18,12 @@
 namespace unjam {
 
 enum class Convergence {
-  // [D]: 90 % of contacts with |dR|^2 / |R_new + R_old|^2 < tol, the rest with
-  // |dR|^2 < tol <|R|>^2, and the summed normal force changed by a relative^2 < tol.
+  // The dynamics (docs/method.md, "One time step", convergence rules): 90 % of contacts with
+  // |dR|^2 / |R_new + R_old|^2 < tol, the rest with |dR|^2 < tol <|R|>^2, and the summed normal
+  // force changed by a relative^2 < tol.
   kForceChange,
   // Largest change of a contact's relative velocity in a sweep, dt |dR| / m_eff, below
-  // velocity_tol (the probe, PHYSICS.md section 6: forces barely move there).
+  // velocity_tol (the probe, docs/probe.md, "The reference method": forces barely move there).
   kVelocityChange,
   // Static solve (v_free = 0): every grain's net force m |v| / dt and torque I |w| / (dt R)
   // below static_tol * F0 and |P_in / P_ext - 1| below static_tol; checked every check_every.

@@ -1,8 +1,8 @@
 #pragma once
-// The frictional contact problem of one contact-dynamics time step (PHYSICS.md sections
-// 3 and 4): the data the solver needs besides its unknowns. The unknowns live in the
-// caller's Contacts (forces fn, ft; geometry read only) and Particles (velocities: free
-// velocities in, velocities at t+dt out).
+// The frictional contact problem of one contact-dynamics time step (docs/method.md, "One time
+// step", with the cell strain rate of the pressure bath): the data the solver needs besides its
+// unknowns. The unknowns live in the caller's Contacts (forces fn, ft; geometry read only) and
+// Particles (velocities: free velocities in, velocities at t+dt out).
 #include <vector>
 
 #include "unjam/core/cell.hpp"
@@ -14,7 +14,7 @@ namespace unjam {
 struct Bath {
   bool enabled = true;    // false: the cell strain rate stays lambda_t (0 for a fixed cell)
   double P_ext = 1.0;     // external pressure
-  double M_lambda = 100.0;  // inertia of the cell (mass units per area; [A] uses 100)
+  double M_lambda = 100.0;  // inertia of the cell (mass units per area; docs/method.md)
 };
 
 struct StepProblem {
@@ -24,8 +24,8 @@ struct StepProblem {
   Bath bath;
   double lambda_t = 0.0;       // cell strain rate at time t
   // Per contact, the gap the step must respect: the contact closes when
-  // g_eff + dt U*_n <= 0. max(gap, 0) by default (PHYSICS.md section 3: no overlap
-  // correction); -g for the probe's opened contact (section 6).
+  // g_eff + dt U*_n <= 0. max(gap, 0) by default (docs/method.md, "One time
+  // step": no overlap correction); -g for the probe's opened contact (docs/probe.md).
   std::vector<double> g_eff;
 };
 

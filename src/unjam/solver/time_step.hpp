@@ -1,5 +1,5 @@
 #pragma once
-// One Moreau-Jean time step of the packing (PHYSICS.md sections 3 and 4):
+// One Moreau-Jean time step of the packing (docs/method.md, "One time step"):
 //   detect contacts at r(t) -> solve the contact problem (NLGS) for the forces at t+dt,
 //   v(t+dt) and lambda(t+dt) -> L(t+dt) = L(t) (1 + lambda dt),
 //   r(t+dt) = r(t) (1 + lambda(t+dt) dt) + dt v(t+dt).

@@ -1,10 +1,10 @@
-#include "unjam/ensemble/lp_barrier.hpp"
+#include "unjam/lp/lp_barrier.hpp"
 
 #include <coin/ClpEventHandler.hpp>
 #include <coin/ClpInterior.hpp>
 #include <coin/ClpSimplex.hpp>
 
-#include "unjam/ensemble/normal_equations.hpp"
+#include "unjam/lp/normal_equations.hpp"
 
 namespace unjam {
 

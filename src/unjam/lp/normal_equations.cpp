@@ -1,4 +1,4 @@
-#include "unjam/ensemble/normal_equations.hpp"
+#include "unjam/lp/normal_equations.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,0 +1,90 @@
+#include "unjam/probe/campaign_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "unjam/core/atomic_file.hpp"
+
+namespace unjam {
+
+CampaignState empty_campaign_state(const Packing& packing) {
+  return CampaignState(ResponseGrid::for_cell(packing.cell, 2.0 * packing.mean_radius()));
+}
+
+SavedCampaign load_campaign_checkpoint(const std::filesystem::path& checkpoint, const Packing& packing,
+                                       const nlohmann::json& settings) {
+  SavedCampaign saved;
+  if (!std::filesystem::exists(checkpoint)) return saved;
+  saved.state = read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), packing, settings);
+  if (saved.state) return saved;
+  saved.set_aside = checkpoint.string() + ".stale";
+  rename_file(checkpoint, saved.set_aside);
+  return saved;
+}
+
+CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
+                                                     const CampaignSettings& settings,
+                                                     CampaignState& state,
+                                                     WorkDistributor& distributor,
+                                                     const CheckpointedCampaignOptions& options) {
+  using clock = std::chrono::steady_clock;
+  const auto seconds = [](clock::time_point from) {
+    return std::chrono::duration<double>(clock::now() - from).count();
+  };
+  const auto interrupted = [&] { return options.interrupted && options.interrupted(); };
+  const auto t0 = clock::now();
+  auto last_checkpoint = t0;
+  const std::size_t done_before = state.rows.size();
+  const auto save = [&](const CampaignState& st) {
+    write_file_atomic(options.checkpoint, campaign_checkpoint_text(options.fingerprint, options.settings, st));
+  };
+  CampaignHooks hooks;
+  if (options.progress)
+    hooks.progress = [&](int done, int all) {
+      const double elapsed = seconds(t0);
+      const double rate = (done - static_cast<double>(done_before)) / std::max(elapsed, 1e-9);
+      options.progress(done, all, elapsed, rate > 0 ? (all - done) / rate : -1);
+    };
+  hooks.checkpoint = [&](const CampaignState& st) {
+    if (seconds(last_checkpoint) < options.checkpoint_s && !interrupted()) return;
+    last_checkpoint = clock::now();
+    save(st);
+  };
+  hooks.should_stop = [&] {
+    return interrupted() ||
+           (options.stop_after > 0 && state.rows.size() >= done_before + options.stop_after);
+  };
+  CheckpointedCampaignResult result;
+  result.finished = run_campaign(packing, settings, state, hooks, distributor);
+  result.wall_s = seconds(t0);
+  if (!result.finished) save(state);
+  return result;
+}
+
+nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats,
+                                     const CampaignSummary& sum) {
+  nlohmann::json j = {
+      {"seed", p.meta.seed},
+      {"N", p.size()},
+      {"mu", p.meta.mu},
+      {"phi", stats.phi},
+      {"z", stats.z},
+      {"F0", p.force_unit()},
+      {"probes", sum.probes},
+      {"not_converged", sum.not_converged},
+      {"F_cont_over_F0", sum.F_cont_over_F0},
+      {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
+  };
+  if (sum.has_fit) {
+    j["alpha"] = sum.fit.alpha;
+    j["alpha_err"] = sum.fit.alpha_err;
+    j["fit"] = {{"r_lo", sum.fit.r_lo}, {"r_hi", sum.fit.r_hi}, {"bins", sum.fit.bins},
+                {"R2", sum.fit.R2}, {"log_A", sum.fit.log_A},
+                {"bootstrap_samples", sum.fit.bootstrap_samples}};
+  } else {
+    j["fit_error"] = sum.fit_error;
+  }
+  return j;
+}
+
+}  // namespace unjam
