@@ -18,15 +18,16 @@
 //
 // A hyperstatic set of sticking contacts leaves forces undetermined; the path therefore
 // carries a small compliance kappa (u + kappa dt^2 (f - f_ref) = 0 on closed contacts,
-// kappa a fraction `compliance` of g / (dt^2 F0)), and at lambda = 1 the last state's
-// system is solved again with kappa / 10, / 100, ... while the step's residual
-// (cd_step_residual) falls. Where that is not exact, the path is followed again at ten times
-// and a tenth of the compliance (`retry`), and the lowest residual kept.
+// kappa a fraction `compliance` of g / (dt^2 F0)), and at lambda = 1 proximal steps move
+// f_ref to the solution, which removes the compliance's displacement (the rigid step). Where
+// that is not exact, the path is followed again at ten times and a tenth of the compliance
+// (`retry`), and the lowest residual kept.
 //
 // Each piece solves the system with the grains' rows eliminated (M is diagonal): a sparse
 // matrix of size 2 N_c + 1 (the Delassus operator W = A^T M^-1 A on the kinematic rows,
-// bordered by the pressure row), factorised by SuiteSparse's KLU, which reuses its pivot
-// order from piece to piece while that stays stable.
+// bordered by the pressure row), factorised by SuiteSparse's KLU and updated by Woodbury's
+// formula between factorisations; every solve is refined with residuals in extended
+// precision, since the compliance leaves cond(S) ~ 1e7-1e10 (docs/probe.md, "The method").
 #include <string>
 
 #include "unjam/packing/packing.hpp"
