@@ -284,6 +284,13 @@ TEST_F(CliReliability, ExitCodesOfEverySubcommand) {
   const ToolRun nlgs = run_tool("probe " + d.string() + " --contact 1 --method nlgs --max-sweeps 5");
   EXPECT_EQ(nlgs.exit_code, 1) << nlgs.output;
   EXPECT_NE(nlgs.output.find("did not converge"), std::string::npos) << nlgs.output;
+  EXPECT_NE(nlgs.output.find("raise --max-sweeps"), std::string::npos) << nlgs.output;
+  // A cd probe without a solution (p50-mu1 at dt = 10, where the path finds none)
+  // says so in words, not as a residual of 1.8e308 printed in full.
+  const ToolRun cd = run_tool("probe " + d.string() + " --contact 1 --method cd --dt 10");
+  EXPECT_EQ(cd.exit_code, 1) << cd.output;
+  EXPECT_NE(cd.output.find("did not converge (method cd, no solution)"), std::string::npos) << cd.output;
+  EXPECT_EQ(cd.output.find("179769"), std::string::npos) << cd.output;
 }
 
 TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {

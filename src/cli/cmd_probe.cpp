@@ -104,6 +104,19 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
   return sol.result;
 }
 
+// Why a single probe is not a solution, and what the user can do about it.
+std::string not_converged_message(const ProbeResult& r, const std::string& method) {
+  char residual[64];
+  std::snprintf(residual, sizeof residual, "residual %.3g g", r.residual);
+  const std::string hint = method == "nlgs"    ? "raise --max-sweeps"
+                           : method == "cd"    ? "the path found none within 1e-6 g; docs/probe.md, \"What limits it\""
+                           : method == "lemke" ? "Lemke's path ended on a ray"
+                                               : "docs/probe.md";
+  return "the probe of contact " + std::to_string(r.contact) + " did not converge (method " + method + ", " +
+         (r.residual == kNoSolution ? std::string("no solution") : std::string(residual)) +
+         "): its F_crit and field are not a solution (" + hint + ")";
+}
+
 void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   if (!o.export_problem.empty()) {
     write_siconos_problem(build_cd_step(p, o.contact, s.nlgs), o.export_problem);
@@ -123,10 +136,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
-  if (!r.converged)
-    throw Error("the probe of contact " + std::to_string(r.contact) + " did not converge (method " + o.method +
-                ", residual " + std::to_string(r.residual) +
-                "): its F_crit and field are not a solution (nlgs: raise --max-sweeps)");
+  if (!r.converged) throw Error(not_converged_message(r, o.method));
 }
 
 std::optional<FitWindow> fit_window(const ProbeOptions& o) {
