@@ -335,8 +335,8 @@ class StepPath {
   // still exceeds kMaxBackwardError, S is factorised afresh and the solve refined again.
   Eigen::VectorXd solve_reduced(const VectorXld& y) {
     Eigen::VectorXd z = updated_solve(y.cast<double>());
-    double omega = refine(y, z);
-    if (rows_.empty() || omega <= kMaxBackwardError) return z;
+    refine(y, z);
+    if (rows_.empty() || backward_error(y, z) <= kMaxBackwardError) return z;
     if (!factorize()) {
       singular_ = true;
       return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
@@ -346,15 +346,13 @@ class StepPath {
     return z;
   }
 
-  // Up to kRefinements steps z += S^-1 (y - S z) until the correction is below 1e-15 |z|;
-  // returns omega of the refined z.
-  double refine(const VectorXld& y, Eigen::VectorXd& z) const {
+  // Up to kRefinements steps z += S^-1 (y - S z), until the correction is below 1e-15 |z|.
+  void refine(const VectorXld& y, Eigen::VectorXd& z) const {
     for (int step = 0; step < kRefinements; ++step) {
-      const Eigen::VectorXd dz = updated_solve(backward_error(y, z).first);
+      const Eigen::VectorXd dz = updated_solve(residual(y, z).cast<double>());
       z += dz;
       if (!(dz.lpNorm<Eigen::Infinity>() > 1e-15 * z.lpNorm<Eigen::Infinity>())) break;
     }
-    return backward_error(y, z).second;
   }
 
   // z = S^-1 y by Woodbury's formula on the factors of S_b.
@@ -369,26 +367,30 @@ class StepPath {
     return z;
   }
 
-  // The residual y - S z, accumulated in long double, and omega (see solve_reduced).
-  std::pair<Eigen::VectorXd, double> backward_error(const VectorXld& y, const Eigen::VectorXd& z) const {
+  // The residual y - S z, accumulated in long double.
+  VectorXld residual(const VectorXld& y, const Eigen::VectorXd& z) const {
     VectorXld r = y;
     for (int j = 0; j < S_.outerSize(); ++j)
       for (Eigen::SparseMatrix<double>::InnerIterator it(S_, j); it; ++it)
         r[it.row()] -= static_cast<long double>(it.value()) * z[j];
+    for (std::size_t i = 0; i < rows_.size(); ++i)
+      for (const auto& [col, v] : D_[i]) r[rows_[i]] -= static_cast<long double>(v) * z[col];
+    return r;
+  }
+
+  // omega of z (see solve_reduced).
+  double backward_error(const VectorXld& y, const Eigen::VectorXd& z) const {
+    const Eigen::VectorXd r = residual(y, z).cast<double>();
     Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cast<double>().cwiseAbs();
     // |S| of a changed row: its entries in the present state (D holds the present entries
     // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
     for (std::size_t i = 0; i < rows_.size(); ++i)
-      for (const auto& [col, v] : D_[i]) {
-        r[rows_[i]] -= static_cast<long double>(v) * z[col];
-        scale[rows_[i]] += std::abs(v * z[col]);
-      }
-    const Eigen::VectorXd rd = r.cast<double>();
+      for (const auto& [col, v] : D_[i]) scale[rows_[i]] += std::abs(v * z[col]);
     double omega = 0.0;
-    for (Eigen::Index i = 0; i < rd.size(); ++i)
-      if (scale[i] > 0.0) omega = std::max(omega, std::abs(rd[i]) / scale[i]);
-      else if (rd[i] != 0.0) omega = std::numeric_limits<double>::infinity();
-    return {rd, omega};
+    for (Eigen::Index i = 0; i < r.size(); ++i)
+      if (scale[i] > 0.0) omega = std::max(omega, std::abs(r[i]) / scale[i]);
+      else if (r[i] != 0.0) omega = std::numeric_limits<double>::infinity();
+    return omega;
   }
 
   // The full system K x = r, x = (v, f), by the reduced one: v_G = M_G^-1 (r_G + A_G f),
