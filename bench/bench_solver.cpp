@@ -116,10 +116,10 @@ struct KernelOutput {
   NlgsResult res;
 };
 
-KernelOutput run_kernel(const KernelInput& in) {
+KernelOutput run_kernel(const KernelInput& in, NlgsThreading& threading) {
   KernelOutput out{in.contacts, {}};
   Particles particles = in.particles;
-  out.res = solve_nlgs(in.pb, in.set, out.contacts, particles);
+  out.res = solve_nlgs(in.pb, in.set, out.contacts, particles, threading);
   return out;
 }
 
@@ -139,9 +139,10 @@ const KernelReference& kernel_reference(int N, int sweeps) {
   omp_set_num_threads(1);
   const Packing& p = bench::static_scene(N, kMu);
   KernelReference ref;
-  const KernelOutput f = run_kernel(kernel_input(p, sweeps));
+  NlgsThreading threading;
+  const KernelOutput f = run_kernel(kernel_input(p, sweeps), threading);
   if (sweeps >= 4) {
-    const KernelOutput q = run_kernel(kernel_input(p, sweeps / 4));
+    const KernelOutput q = run_kernel(kernel_input(p, sweeps / 4), threading);
     ref.residual_quarter = q.res.max_residual_F0;
     ref.perr_quarter = std::abs(q.res.P_in - 1.0);
   }
@@ -168,11 +169,12 @@ void kernel_benchmark(benchmark::State& state, int sweeps) {
   const std::int64_t nc = static_cast<std::int64_t>(in.contacts.size());
 
   KernelOutput out;
+  NlgsThreading threading;  // the iterations' solves share the measurements of Threading::kAuto
   double solve_s = 0.0, cpu_s = 0.0;
   for (auto _ : state) {
     const auto t0 = Clock::now();
     const double c0 = process_cpu_s();
-    out = run_kernel(in);
+    out = run_kernel(in, threading);
     cpu_s += process_cpu_s() - c0;
     solve_s += seconds(t0, Clock::now());
     benchmark::DoNotOptimize(out.contacts.data());
@@ -235,8 +237,9 @@ struct StepReference {
 Packing run_steps(const Packing& from, int steps, std::int64_t& sweeps, std::int64_t& updates) {
   Packing p = from;
   const CompactionSettings cs;
+  NlgsThreading threading;
   for (int s = 0; s < steps; ++s) {
-    const StepReport r = advance(p, cs.dynamics);
+    const StepReport r = advance(p, cs.dynamics, threading);
     sweeps += r.sweeps;
     updates += static_cast<std::int64_t>(r.sweeps) * r.num_contacts;
   }
@@ -265,6 +268,7 @@ void BM_AdvanceStep(benchmark::State& state) {
   std::int64_t sweeps = 0, updates = 0;
   double step_s = 0.0, cpu_s = 0.0;
   Packing last;
+  NlgsThreading threading;  // the iterations' steps share the measurements of Threading::kAuto
   for (auto _ : state) {
     state.PauseTiming();
     Packing p = scene;
@@ -273,7 +277,7 @@ void BM_AdvanceStep(benchmark::State& state) {
     const double c0 = process_cpu_s();
     const CompactionSettings cs;
     for (int s = 0; s < kStepsPerIter; ++s) {
-      const StepReport r = advance(p, cs.dynamics);
+      const StepReport r = advance(p, cs.dynamics, threading);
       sweeps += r.sweeps;
       updates += static_cast<std::int64_t>(r.sweeps) * r.num_contacts;
     }

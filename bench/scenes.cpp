@@ -90,9 +90,10 @@ Packing compressing(int N, std::uint64_t seed, double phi_target) {
   Packing p = gas(N, seed);
   p.meta.mu = 0.1;
   const CompactionSettings cs;  // the dynamics of the compaction
+  NlgsThreading threading;
   while (p.packing_fraction() < phi_target) {
     if (p.state.step >= 1'000'000) throw Error("bench scene compressing: phi not reached");
-    advance(p, cs.dynamics);
+    advance(p, cs.dynamics, threading);
   }
   return p;
 }

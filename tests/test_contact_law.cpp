@@ -44,7 +44,8 @@ PairSolve solve_pair(Packing& p, double dt, double mu) {
   NlgsSettings set;
   set.tol = 1e-14;
   set.max_sweeps = 50;
-  const NlgsResult res = solve_nlgs(pb, set, contacts, p.particles);
+  NlgsThreading threading;
+  const NlgsResult res = solve_nlgs(pb, set, contacts, p.particles, threading);
   return {contacts.at(0), res};
 }
 
@@ -295,7 +296,8 @@ TEST(ContactLaw, WarmStartDoesNotChangeTheSolution) {
   pb.g_eff = positive_gaps(contacts);
   NlgsSettings set;
   set.tol = 1e-14;
-  const NlgsResult res = solve_nlgs(pb, set, contacts, p.particles);
+  NlgsThreading threading;
+  const NlgsResult res = solve_nlgs(pb, set, contacts, p.particles, threading);
   EXPECT_TRUE(res.converged);
   EXPECT_LT(rel(contacts[0].fn, h.Rn), 1e-12);
   EXPECT_LT(std::abs(contacts[0].ft - h.Rt), 1e-12 * h.Rn);

@@ -238,5 +238,24 @@ TEST(Dynamics, ManyBodyWithTheBathConservesPeculiarMomentum) {
 // and sweep, which get very slow when the two cores are shared with other processes.
 TEST(Determinism, OneAndTwoThreadsGiveBitIdenticalDynamics) { compare_one_and_two_threads(3, 30); }
 
+// Threading::kAuto's choice (docs/method.md, "Threading of the sweeps") follows only the
+// measurements of the caller's NlgsThreading: parallel first, then serial, then the faster
+// mode with the other tried again every 32nd choice; another object starts afresh.
+TEST(Determinism, AutoThreadingChoiceFollowsOnlyItsOwnMeasurements) {
+  NlgsThreading a, b;
+  EXPECT_TRUE(a.choose_parallel());
+  a.record(true, 30.0);
+  EXPECT_FALSE(a.choose_parallel());
+  a.record(false, 10.0);
+  EXPECT_TRUE(a.parallel_is_slow());
+  int parallel = 0;
+  for (int i = 0; i < 64; ++i) parallel += a.choose_parallel() ? 1 : 0;
+  EXPECT_EQ(parallel, 2);  // the slower mode, on the 32nd and 64th choice
+  a.record(true, 0.0);     // avg 0.7 * 30 = 21 ns: still slower than serial
+  EXPECT_TRUE(a.parallel_is_slow());
+  EXPECT_TRUE(b.choose_parallel());
+  EXPECT_FALSE(b.parallel_is_slow());
+}
+
 }  // namespace
 }  // namespace unjam

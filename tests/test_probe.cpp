@@ -183,6 +183,22 @@ TEST(Probe, KinematicProbeMatchesTheLpAndOpensTheContact) {
   }
 }
 
+// Contact 2 of the 50-disk fixture needs more than two active-set rounds (docs/probe.md,
+// "The fast method"): stopped after one update it still breaks a unilateral condition and
+// is not converged; with the default limit it ends with none broken and converged.
+TEST(Probe, KinematicProbeStoppedWithViolationsLeftIsNotConverged) {
+  const Packing& p = fixture_p50();
+  KinematicProbeSettings short_set;
+  short_set.max_rounds = 1;
+  const ProbeResult stopped = KinematicProbe(p, short_set).probe(2);
+  EXPECT_GT(stopped.violations, 0);
+  EXPECT_FALSE(stopped.converged);
+  const ProbeResult full = KinematicProbe(p, {}).probe(2);
+  EXPECT_EQ(full.violations, 0);
+  EXPECT_TRUE(full.converged);
+  EXPECT_EQ(full.f_crit, stopped.f_crit);  // the LP optimum does not depend on the field's rounds
+}
+
 // Every contact of the 50-disk fixture by `method` on 1 and on 2 threads: the same contacts,
 // F_crit, residuals and averages. Returns the one-thread campaign.
 CampaignState same_campaign_on_one_and_two_threads(ProbeMethod method) {

@@ -31,6 +31,7 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
   solve.touch_gap = std::max(solve.touch_gap, 2.0 * max_gap);
   Bath bath;
   bath.P_ext = packing.meta.P_ext;
+  NlgsThreading threading;  // measurements of Threading::kAuto, shared by the walk's solves
 
   RandomWalkResult result;
   double mean_fn0 = 0.0;  // <F_n> of the packing's network over the set
@@ -54,7 +55,7 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
       work.contacts[k].ft = state.ft[k] + kick(rng);
     }
     solve.seed = rng();
-    const StaticSolveReport rep = solve_static(work, bath, solve);
+    const StaticSolveReport rep = solve_static(work, bath, solve, threading);
     result.sweeps += rep.sweeps;
     if (rep.converged) {
       for (int k = 0; k < Nc; ++k) {

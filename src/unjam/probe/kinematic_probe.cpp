@@ -7,9 +7,6 @@
 #include "unjam/core/least_norm.hpp"
 
 namespace unjam {
-namespace {
-constexpr int kMaxRounds = 50;  // active-set updates of the kinematic problem
-}  // namespace
 
 KinematicProbe::KinematicProbe(const Packing& packing, const KinematicProbeSettings& settings)
     : packing_(&packing),
@@ -91,10 +88,12 @@ ProbeResult KinematicProbe::probe(int contact) {
         ++r.violations;
       }
     }
-    if (r.violations == 0 || round == kMaxRounds) break;
+    if (r.violations == 0 || round == settings_.max_rounds) break;
   }
-  // F_crit is the LP optimum, exact; the field's quality is in residual and violations.
-  r.converged = true;
+  // F_crit is the LP optimum, exact. The field is a solution of the kinematic problem only
+  // when no unilateral condition is violated: violations > 0 here means the round limit was
+  // reached with contacts newly held whose field was not recomputed.
+  r.converged = r.violations == 0;
 
   r.u.assign(p.size(), Vec2::Zero());
   r.u_rot.assign(p.size(), 0.0);

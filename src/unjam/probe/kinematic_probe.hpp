@@ -30,6 +30,8 @@ struct KinematicProbeSettings {
   double state_tol = 1e-7;    // (units of F0) open: fn <= tol; sliding: mu fn - |ft| <= tol
   double M_lambda = 100.0;    // bath mass: weight of the cell strain in the kinetic energy
   LpMethod method = LpMethod::barrier;
+  int max_rounds = 50;        // active-set updates of the kinematic problem after its first solve
+
 };
 
 // Holds the admissible set of one packing and its LP; probes one contact after another.

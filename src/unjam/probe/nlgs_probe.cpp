@@ -34,12 +34,13 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   // NLGS sweeps are counted in int: run in chunks, each warm-started from the last, with
   // the velocities reset to the free velocities (zero) before every chunk.
   constexpr int kChunk = 1'000'000;
+  NlgsThreading threading;  // the probe's chunks share the measurements of Threading::kAuto
   NlgsResult res;
   while (r.sweeps < set.max_sweeps) {
     particles.stop();
     nlgs.max_sweeps = static_cast<int>(std::min<long long>(kChunk, set.max_sweeps - r.sweeps));
     nlgs.seed = set.seed + static_cast<std::uint64_t>(r.sweeps);
-    res = solve_nlgs(pb, nlgs, contacts, particles);
+    res = solve_nlgs(pb, nlgs, contacts, particles, threading);
     r.sweeps += res.sweeps;
     if (res.converged) break;
   }

@@ -18,6 +18,8 @@ struct ProbeResult {
   double lambda_dt = 0.0;      // affine strain of the cell during the probe, lambda dt
   std::vector<Vec2> u;         // peculiar displacement of every grain (length units)
   std::vector<double> u_rot;   // rotation of every grain (radians)
+  // nlgs: the convergence rule was met; lp: no unilateral condition left broken
+  // (violations == 0); lemke and cd: the step's residual within its tolerance.
   bool converged = false;
   long long sweeps = 0;        // NLGS sweeps (0 for the kinematic probe)
   // nlgs: largest relative-velocity change of the last sweep / (g / dt);

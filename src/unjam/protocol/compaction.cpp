@@ -62,12 +62,14 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
 
   const double min_side = p.min_cell_side();
   p.state.is_static = false;
+  // Measurements of Threading::kAuto, shared by the compaction's steps and static attempts.
+  NlgsThreading threading;
   while (res.steps < s.max_steps) {
     if (hooks.should_stop && hooks.should_stop()) {
       res.stopped = true;
       break;
     }
-    const StepReport rep = advance(p, s.dynamics);
+    const StepReport rep = advance(p, s.dynamics, threading);
     if (std::min(p.cell.Lx, p.cell.Ly) < min_side) {
       char buf[240];
       std::snprintf(buf, sizeof buf,
@@ -97,7 +99,7 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
       sweeps_since_attempt = 0;
       v_last_attempt = v_mean;
       fs.seed = s.dynamics.nlgs.seed + static_cast<std::uint64_t>(res.static_attempts);
-      res.final_solve = solve_static(trial, s.dynamics.bath, fs);
+      res.final_solve = solve_static(trial, s.dynamics.bath, fs, threading);
       ++res.static_attempts;
       if (hooks.attempt) hooks.attempt(p.state.step, v_mean, res.final_solve);
       if (res.final_solve.converged) {

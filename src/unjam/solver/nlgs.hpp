@@ -30,11 +30,33 @@ enum class Convergence {
   kStatic,
 };
 
-// How a solve uses the threads. Serial and parallel sweeps give bit-identical results.
+// How a solve uses the threads (docs/method.md, "Threading of the sweeps"). Serial and
+// parallel sweeps give bit-identical results, so the policy changes the run time only.
 enum class Threading {
-  kAuto,      // the faster mode as measured during the run (parallel only when it pays)
+  kAuto,      // the faster mode as measured by the caller's NlgsThreading (parallel only when it pays)
   kParallel,  // always parallel when there are enough contacts
   kSerial,
+};
+
+// The measurements Threading::kAuto chooses from, owned by the caller (docs/method.md,
+// "Threading of the sweeps"): the cost of one contact update in each mode, in ns, as
+// exponential moving averages avg <- 0.7 avg + 0.3 ns (0 while unknown). A caller that runs
+// many solves (a compaction's time steps and static attempts, a probe's chunks) passes the
+// same object to all of them; solves given different objects do not influence each other.
+// One object serves one thread at a time.
+class NlgsThreading {
+ public:
+  // Parallel when it has been measured faster; each mode is measured first (parallel, then
+  // serial), and the slower one is tried again every 32nd choice, since the load changes.
+  bool choose_parallel();
+  // Folds one measured cost per contact update (ns) into the mode's average.
+  void record(bool parallel, double ns_per_update);
+  // Parallel sweeps cost more than 1.5 times the serial ones measured before.
+  bool parallel_is_slow() const;
+
+ private:
+  double ns_serial_ = 0.0, ns_parallel_ = 0.0;
+  int choices_ = 0;
 };
 
 struct NlgsSettings {
@@ -66,7 +88,10 @@ struct NlgsResult {
 
 // Solves the step. In: particles' velocities are the free velocities v(t) (no body forces),
 // contacts hold the warm-start forces. Out: velocities at t + dt, forces at t + dt.
+// `threading` records the measured costs of every solve large enough to run in parallel
+// (unless settings.threading is kSerial) and is read under kAuto only; the result does not
+// depend on it.
 NlgsResult solve_nlgs(const StepProblem& problem, const NlgsSettings& settings,
-                      Contacts& contacts, Particles& particles);
+                      Contacts& contacts, Particles& particles, NlgsThreading& threading);
 
 }  // namespace unjam

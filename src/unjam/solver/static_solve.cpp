@@ -18,6 +18,12 @@ void set_at_rest(Packing& p) {
 }  // namespace
 
 StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSettings& set) {
+  NlgsThreading threading;
+  return solve_static(p, bath, set, threading);
+}
+
+StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSettings& set,
+                               NlgsThreading& threading) {
   update_contact_geometry(p.particles, p.cell, p.contacts);
   const StepProblem pb{p.cell, set.dt, p.meta.mu, bath, 0.0, touching_gaps(p.contacts, set.touch_gap)};
 
@@ -34,7 +40,7 @@ StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSe
     nlgs.static_tol = target;
     nlgs.max_sweeps = set.max_sweeps - rep.sweeps;
     nlgs.seed = set.seed + static_cast<std::uint64_t>(round);
-    const NlgsResult res = solve_nlgs(pb, nlgs, p.contacts, p.particles);
+    const NlgsResult res = solve_nlgs(pb, nlgs, p.contacts, p.particles, threading);
     rep.sweeps += res.sweeps;
     rep.max_residual_F0 = res.max_residual_F0;
     rep.pressure_error = std::abs(res.P_in / bath.P_ext - 1.0);

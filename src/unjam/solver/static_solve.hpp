@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "unjam/packing/packing.hpp"
+#include "unjam/solver/nlgs.hpp"
 #include "unjam/solver/step_problem.hpp"
 
 namespace unjam {
@@ -32,7 +33,12 @@ struct StaticSolveReport {
 };
 
 // Solves in place: packing.contacts' forces become the static network (warm-started from
-// their current values); velocities and lambda are set to zero.
+// their current values); velocities and lambda are set to zero. `threading` holds the
+// measurements of Threading::kAuto (nlgs.hpp), shared by the solve's NLGS rounds and by
+// whatever else the caller passes it to.
+StaticSolveReport solve_static(Packing& packing, const Bath& bath, const StaticSolveSettings& settings,
+                               NlgsThreading& threading);
+// The same with measurements of its own.
 StaticSolveReport solve_static(Packing& packing, const Bath& bath, const StaticSolveSettings& settings);
 
 }  // namespace unjam

@@ -8,6 +8,11 @@
 namespace unjam {
 
 StepReport advance(Packing& p, const DynamicsSettings& set) {
+  NlgsThreading threading;
+  return advance(p, set, threading);
+}
+
+StepReport advance(Packing& p, const DynamicsSettings& set, NlgsThreading& threading) {
   Particles& P = p.particles;
   const double dt = set.dt;
   const std::size_t n = P.size();
@@ -26,7 +31,7 @@ StepReport advance(Packing& p, const DynamicsSettings& set) {
   StepProblem pb{p.cell, dt, p.meta.mu, set.bath, p.state.lambda, positive_gaps(p.contacts)};
   NlgsSettings nlgs = set.nlgs;
   nlgs.seed = set.nlgs.seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(p.state.step);
-  const NlgsResult res = solve_nlgs(pb, nlgs, p.contacts, P);
+  const NlgsResult res = solve_nlgs(pb, nlgs, p.contacts, P, threading);
 
   // Affine scaling of the cell and of every position, then the peculiar displacement.
   const double scale = 1.0 + res.lambda * dt;

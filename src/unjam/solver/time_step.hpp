@@ -25,7 +25,10 @@ struct StepReport {
 };
 
 // Advances the packing by one step; packing.contacts holds the contact list of the step
-// (geometry at t, forces at t+dt) afterwards.
+// (geometry at t, forces at t+dt) afterwards. `threading` holds the measurements of
+// Threading::kAuto (nlgs.hpp); a loop of steps passes the same object to every step.
+StepReport advance(Packing& packing, const DynamicsSettings& settings, NlgsThreading& threading);
+// One step with measurements of its own (kAuto learns within the step only).
 StepReport advance(Packing& packing, const DynamicsSettings& settings);
 
 }  // namespace unjam
