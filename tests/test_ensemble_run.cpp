@@ -65,6 +65,34 @@ TEST(EnsembleRun, LpProbesOfTheForceCarryingContactsReachFnMax) {
     if (r.probes[k]) EXPECT_EQ(one.probes[k]->f_crit, r.probes[k]->f_crit) << "contact " << k;
 }
 
+TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
+  // The probes of an ensemble take the touch gap and bath mass stored with the packing, as
+  // `unjam probe` does (campaign_settings_for), not the library's defaults; g, dt and the
+  // NLGS tolerance are the ensemble's own.
+  Packing p = read_packing(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu1");
+  p.meta.settings["dynamics"]["M_lambda"] = 0.5;
+  p.meta.settings["static"]["touch_gap"] = 2e-6;
+  EnsembleSettings in;
+  in.probe_g = 2e-9;
+  in.probe_dt = 2e-3;
+  in.probe_velocity_tol = 1e-7;
+  const CampaignSettings probe = campaign_settings_for(p);
+  for (const char* method : {"nlgs", "lp"}) {
+    const CampaignSettings s = ensemble_probe_settings(p, in, method);
+    EXPECT_EQ(s.method, std::string(method) == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs);
+    EXPECT_EQ(s.nlgs.bath.M_lambda, 0.5);
+    EXPECT_EQ(s.kinematic.M_lambda, 0.5);
+    EXPECT_EQ(s.nlgs.touch_gap, 2e-6);
+    EXPECT_EQ(s.kinematic.touch_gap, 2e-6);
+    EXPECT_EQ(s.nlgs.bath.M_lambda, probe.nlgs.bath.M_lambda);
+    EXPECT_EQ(s.nlgs.touch_gap, probe.nlgs.touch_gap);
+    EXPECT_EQ(s.nlgs.g, 2e-9);
+    EXPECT_EQ(s.kinematic.g, 2e-9);
+    EXPECT_EQ(s.nlgs.dt, 2e-3);
+    EXPECT_EQ(s.nlgs.velocity_tol, 1e-7);
+  }
+}
+
 TEST(EnsembleRun, NoProbeAndQuantiles) {
   EnsembleSettings s = lp_hit_and_run(2);
   s.probe = "none";

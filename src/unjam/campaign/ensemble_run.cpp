@@ -43,12 +43,7 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
       todo.push_back(k);
       contacts.push_back(sys.contacts[k]);
     }
-  CampaignSettings s;
-  s.method = r.probe == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
-  s.nlgs.g = s.kinematic.g = in.probe_g;
-  s.nlgs.dt = in.probe_dt;
-  s.nlgs.velocity_tol = in.probe_velocity_tol;
-  s.nlgs.bath.P_ext = packing.meta.P_ext;
+  const CampaignSettings s = ensemble_probe_settings(packing, in, r.probe);
   const std::string what = "probe " + r.probe + " (contacts)";
   const auto t0 = std::chrono::steady_clock::now();
   const int saved = omp_get_max_threads();
@@ -81,6 +76,17 @@ double quantile(std::vector<double> x, double q) {
   const std::size_t i = static_cast<std::size_t>(pos);
   if (i + 1 >= x.size()) return x.back();
   return x[i] + (pos - i) * (x[i + 1] - x[i]);
+}
+
+CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& in,
+                                         const std::string& method) {
+  CampaignSettings s = campaign_settings_for(packing);
+  s.method = method == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
+  s.nlgs.g = s.kinematic.g = in.probe_g;
+  s.nlgs.dt = in.probe_dt;
+  s.nlgs.velocity_tol = in.probe_velocity_tol;
+  s.nlgs.bath.P_ext = packing.meta.P_ext;
+  return s;
 }
 
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {

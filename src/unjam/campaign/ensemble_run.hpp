@@ -18,6 +18,7 @@
 #include "unjam/ensemble/hit_and_run.hpp"
 #include "unjam/ensemble/random_walk.hpp"
 #include "unjam/packing/packing.hpp"
+#include "unjam/probe/probe_campaign.hpp"
 #include "unjam/probe/probe_result.hpp"
 
 namespace unjam {
@@ -64,6 +65,12 @@ struct EnsembleReport {
 // Every part of the ensemble of `packing` with `settings`. Throws unjam::Error as the
 // samplers and probes do (the probes' errors name the contact).
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& settings);
+
+// The probes' settings: the packing's own contact model (touch gap and bath mass from its
+// metadata, as `unjam probe` takes them: campaign_settings_for) with the ensemble's opening
+// g, time step and NLGS tolerance, and `method` (nlgs or lp).
+CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
+                                         const std::string& method);
 
 // Linear-interpolation quantile q in [0, 1] of x (non-empty).
 double quantile(std::vector<double> x, double q);
