@@ -106,10 +106,12 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
 
 // Why a single probe is not a solution, and what the user can do about it.
 std::string not_converged_message(const ProbeResult& r, const std::string& method) {
-  char residual[64];
+  char residual[64], cd_hint[128];
   std::snprintf(residual, sizeof residual, "residual %.3g g", r.residual);
+  std::snprintf(cd_hint, sizeof cd_hint, "the path found none within %g g; docs/probe.md, \"What limits it\"",
+                kExactStepTolerance);
   const std::string hint = method == "nlgs"    ? "raise --max-sweeps"
-                           : method == "cd"    ? "the path found none within 1e-6 g; docs/probe.md, \"What limits it\""
+                           : method == "cd"    ? std::string(cd_hint)
                            : method == "lemke" ? "Lemke's path ended on a ray"
                                                : "docs/probe.md";
   return "the probe of contact " + std::to_string(r.contact) + " did not converge (method " + method + ", " +

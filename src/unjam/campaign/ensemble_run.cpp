@@ -85,8 +85,7 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
   s.nlgs.g = s.kinematic.g = in.probe_g;
   s.nlgs.dt = in.probe_dt;
   s.nlgs.velocity_tol = in.probe_velocity_tol;
-  s.nlgs.bath.P_ext = packing.meta.P_ext;
-  return s;
+  return s;  // P_ext: the nlgs probe takes the packing's own (probe/nlgs_probe)
 }
 
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {

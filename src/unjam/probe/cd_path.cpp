@@ -401,14 +401,15 @@ class StepPath {
     // y in extended precision: a_r^T M_G^-1 r_G is of the order of the loads (F0 / m),
     // the kinematic terms of g / dt^2; rounded to double, the difference would carry an
     // error that S^-1 amplifies by cond(S) (see solve_reduced).
+    VectorXld t(n_);  // M_G^-1 r_G; the pressure row's entry is not eliminated
+    for (int i = 0; i < n_; ++i) t[i] = static_cast<long double>(pb_.inverse_mass[i]) * r[i];
+    t[p] = 0.0L;
     VectorXld y = VectorXld::Zero(2 * nc_ + 1);
     const Eigen::SparseMatrix<double>& A = pb_.system.A;
     for (int j = 0; j < A.outerSize(); ++j)
       if (active(j))
         for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
-          if (it.row() != p)
-            y[j] -= static_cast<long double>(it.value()) *
-                    (static_cast<long double>(pb_.inverse_mass[it.row()]) * r[it.row()]);
+          y[j] -= static_cast<long double>(it.value()) * t[it.row()];
     for (int i = 0; i < 2 * nc_; ++i) y[i] += r[n_ + i];
     y[2 * nc_] = r[p];
     const Eigen::VectorXd z = solve_reduced(y);
