@@ -30,7 +30,9 @@ const Packing& fixture(const std::string& name) {
 }
 
 // contact -> F_crit of the solution reached from the static state (simulation units).
-std::map<int, double> cd_reference() {
+// Column `column` of cd-reference.csv (1: F_crit from the static state, 2: the other exact
+// solution, where there is one), by contact.
+std::map<int, double> cd_reference(int column = 1) {
   std::ifstream in(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu1/cd-reference.csv");
   std::map<int, double> ref;
   std::string line;
@@ -39,8 +41,8 @@ std::map<int, double> cd_reference() {
     std::istringstream row(line);
     std::string k, f;
     std::getline(row, k, ',');
-    std::getline(row, f, ',');
-    ref[std::stoi(k)] = std::stod(f);
+    for (int c = 0; c < column; ++c) f.clear(), std::getline(row, f, ',');
+    if (!f.empty()) ref[std::stoi(k)] = std::stod(f);
   }
   return ref;
 }
@@ -131,6 +133,35 @@ TEST(CdPath, FollowsTheStepFromTheStaticNetworkToTheReference) {
     EXPECT_LT(s.residual.max(), kExactStepTolerance) << "contact " << k;
     EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-6) << "contact " << k;
     EXPECT_GT(stats.open + stats.sliding, 0);
+  }
+}
+
+TEST(CdPath, FromTheLpOptimumFindsTheStepsOtherSolution) {
+  // p50-mu1, started from the lp probe's optimum (CdPathStart::lp_optimum). Contacts 1 and 2
+  // have one solution: the same F_crit as from the static network, in fewer pieces. Contacts
+  // 5 and 6 have two: from the LP optimum the path reaches the independent solver's other
+  // solution (2.2454, 2.2438; cd-reference.csv, reached there from the LP optimum's active
+  // set) exactly, where from the static network it reaches 2.2677 and 2.2687 (test above).
+  const Packing& p = fixture("p50-mu1");
+  const std::map<int, double> other = cd_reference(2);
+  ASSERT_EQ(other.size(), 2u);
+  CdPathSettings from_lp;
+  from_lp.start = CdPathStart::lp_optimum;
+  for (const auto& [k, f_static] : cd_reference()) {
+    CdPathStats lp_stats, static_stats;
+    const CdStepSolution s = probe_cd_path(p, k, ProbeSettings{}, from_lp, &lp_stats);
+    probe_cd_path(p, k, ProbeSettings{}, CdPathSettings{}, &static_stats);
+    ASSERT_TRUE(s.result.converged) << "contact " << k;
+    EXPECT_LT(s.residual.max(), kExactStepTolerance) << "contact " << k;
+    EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-6) << "contact " << k;
+    const auto it = other.find(k);
+    if (it == other.end()) {
+      EXPECT_NEAR(s.result.f_crit / f_static, 1.0, 1e-6) << "contact " << k;
+      EXPECT_LT(lp_stats.pieces, static_stats.pieces) << "contact " << k;
+    } else {
+      EXPECT_NEAR(s.result.f_crit / it->second, 1.0, 1e-6) << "contact " << k;
+      EXPECT_GT(std::abs(s.result.f_crit / f_static - 1.0), 5e-3) << "contact " << k;
+    }
   }
 }
 

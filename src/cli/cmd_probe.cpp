@@ -37,7 +37,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ProbeOptions {
-  std::string dir, out, method = "lp", displacement = "peculiar", export_problem;
+  std::string dir, out, method = "lp", displacement = "peculiar", export_problem, cd_start = "static";
   int contact = -1;
   bool all = false;
   int sample = 0;
@@ -58,6 +58,9 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
   s.method = method_from_name(o.method);
+  s.cd_start = cd_start_from_name(o.cd_start);
+  if (s.cd_start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
+    throw Error("--cd-start applies to --method cd only");
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -97,7 +100,7 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
 ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s, int contact,
                                     const fs::path& out) {
   const CdStepSolution sol = s.method == ProbeMethod::kLemke ? probe_cd_lemke(p, contact, s.nlgs)
-                                                             : probe_cd_path(p, contact, s.nlgs);
+                                                             : probe_cd_path(p, contact, s.nlgs, cd_path_settings(s));
   if (sol.f.size() > 0)
     write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
                       step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
@@ -131,7 +134,8 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
-  std::printf("contact %d (grains %d-%d), method %s\n", r.contact, r.a, r.b, o.method.c_str());
+  std::printf("contact %d (grains %d-%d), method %s%s\n", r.contact, r.a, r.b, o.method.c_str(),
+              s.cd_start == CdPathStart::lp_optimum ? ", path from the lp optimum" : "");
   std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
               r.f_crit / F0, r.f_crit / r.f_cont);
   std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
@@ -347,6 +351,11 @@ void add_probe_command(CLI::App& app) {
                   "nlgs: the paper's contact-dynamics probe (reference, slow); "
                   "lemke: the same step solved exactly by Lemke's method (dense, up to ~1200 contacts); "
                   "cd: the same step solved exactly along its path from the static network (sparse; each probe's residual says whether it is exact, docs/probe.md)")
+      ->capture_default_str();
+  cmd->add_option("--cd-start", o->cd_start,
+                  "cd: where the path starts: static (the static network; the solution the step's "
+                  "dynamics from rest reach) or lp (the lp probe's optimum; finds another solution "
+                  "where the step has several, on small packings: it fails at 500 disks; docs/probe.md, \"Where the path starts\")")
       ->capture_default_str();
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");

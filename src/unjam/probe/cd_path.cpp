@@ -15,6 +15,7 @@
 #include <klu.h>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/probe/kinematic_probe.hpp"
 
 namespace unjam {
 
@@ -108,6 +109,7 @@ class StepPath {
         gap1_[k] = -gap0_[k];
       }
     fref1_ = Eigen::VectorXd::Zero(2 * nc_);
+    tgap0_ = tgap1_ = Eigen::VectorXd::Zero(nc_);
     load0_ = pb.system.A * f0;
     load1_ = pb.system.rhs - load0_;
     const Eigen::SparseMatrix<double>& A = pb.system.A;
@@ -122,6 +124,39 @@ class StepPath {
   const std::vector<State>& states() const { return state_; }
   void start(const std::vector<State>& states) { state_ = states; }
 
+  // Starts the path from a guess instead of the static network: states, forces f (obeying
+  // the states' force conditions strictly) and velocities v = q / dt^2 (rows of A). The
+  // data at lambda = 0 are made such that (v, f) solves the step of those states exactly,
+  // with every displacement condition strict by at least `margin` g: the load on the
+  // balance rows is A f - M v, each closed pair's gap and each closed pair's tangential
+  // offset cancel its displacement, and an open pair that would close, or a sliding pair
+  // that would slip against its force, is offset to `margin` (distinct per contact, to
+  // break ties). At lambda = 1 the data are the step's own. This is a homotopy of the
+  // right-hand side, like Lemke's covering vector: the path from a guess near the solution
+  // is short.
+  void start_at(const std::vector<State>& states, const Eigen::VectorXd& f, const Eigen::VectorXd& v,
+                double margin) {
+    state_ = states;
+    fref0_ = f;
+    fref1_.setZero();
+    const Eigen::SparseMatrix<double>& A = pb_.system.A;
+    load0_ = A * f - v.cwiseQuotient(pb_.inverse_mass);
+    load1_ = pb_.system.rhs - load0_;
+    const Eigen::VectorXd u = A.transpose() * v;  // relative displacements / dt^2
+    for (int k = 0; k < nc_; ++k) {
+      const double m = margin * pb_.g * (1.0 + static_cast<double>(k) / nc_);
+      const double gap = pb_.g_eff[k], un = u[2 * k] * dt2_, ut = u[2 * k + 1] * dt2_;
+      const State s = state_[k];
+      gap0_[k] = closed(s) ? -un : un + gap >= m ? gap : gap + (m - un - gap);
+      tgap0_[k] = 0.0;
+      if (s == State::kStick) tgap0_[k] = -ut;
+      const double sgn = slip_sign(s);
+      if (sgn != 0.0 && sgn * ut < m) tgap0_[k] = sgn * m - ut;
+      gap1_[k] = gap - gap0_[k];
+      tgap1_[k] = -tgap0_[k];
+    }
+  }
+
   // Turns the path into one step of a proximal iteration at lambda = 1 (the opening and the
   // load held at their final values): the reference forces move from the present ones to f
   // (a solution at the present reference) as the path parameter goes from 0 to 1. A solution
@@ -130,6 +165,8 @@ class StepPath {
   void proximal_step(const Eigen::VectorXd& f) {
     gap0_ += gap1_;
     gap1_.setZero();
+    tgap0_ += tgap1_;
+    tgap1_.setZero();
     load0_ += load1_;
     load1_.setZero();
     fref0_ += fref1_;
@@ -215,8 +252,8 @@ class StepPath {
       r0[rn] = -gap0_[k] / dt2_ + kappa_ * fref0_[2 * k];
       r1[rn] = -gap1_[k] / dt2_ + kappa_ * fref1_[2 * k];
       if (state_[k] == State::kStick) {
-        r0[rt] = kappa_ * fref0_[2 * k + 1];
-        r1[rt] = kappa_ * fref1_[2 * k + 1];
+        r0[rt] = -tgap0_[k] / dt2_ + kappa_ * fref0_[2 * k + 1];
+        r1[rt] = -tgap1_[k] / dt2_ + kappa_ * fref1_[2 * k + 1];
       }
     }
     x0 = solve_full(r0);
@@ -231,7 +268,8 @@ class StepPath {
 
   // Compliant slip c_t of open contact k (ft = 0) at lambda on the current piece.
   double slip(int k, double lambda) const {
-    return u0_[2 * k + 1] + lambda * u1_[2 * k + 1] - kappa_ * (fref0_[2 * k + 1] + lambda * fref1_[2 * k + 1]);
+    return u0_[2 * k + 1] + tgap0_[k] / dt2_ + lambda * (u1_[2 * k + 1] + tgap1_[k] / dt2_) -
+           kappa_ * (fref0_[2 * k + 1] + lambda * fref1_[2 * k + 1]);
   }
 
   // Calls fn(a, b, scale, next) for every function a + lambda b >= 0 that contact k's
@@ -259,8 +297,8 @@ class StepPath {
         const double s = slip_sign(state_[k]);
         fn(fn0, fn1, f_scale, State::kOpen);
         // compliant slip c_t = u_t / dt^2 + kappa (ft - fref_t) keeps the sign s
-        fn(s * (u0_[2 * k + 1] + kappa_ * (ft0 - fref0_[2 * k + 1])),
-           s * (u1_[2 * k + 1] + kappa_ * (ft1 - fref1_[2 * k + 1])),
+        fn(s * (u0_[2 * k + 1] + tgap0_[k] / dt2_ + kappa_ * (ft0 - fref0_[2 * k + 1])),
+           s * (u1_[2 * k + 1] + tgap1_[k] / dt2_ + kappa_ * (ft1 - fref1_[2 * k + 1])),
            u_scale, State::kStick);
         break;
       }
@@ -427,7 +465,9 @@ class StepPath {
   Eigen::VectorXd u0_, u1_;
   // The path's data, linear in its parameter lambda: g_eff = gap0 + lambda gap1, the load
   // on the balance rows load0 + lambda load1, the compliance's reference fref0 + lambda fref1.
-  Eigen::VectorXd gap0_, gap1_, load0_, load1_, fref0_, fref1_;
+  // tangential offset of closed pairs tgap0 + lambda tgap1 (zero in the step itself; a
+  // start from a guess uses it, see start_at).
+  Eigen::VectorXd gap0_, gap1_, tgap0_, tgap1_, load0_, load1_, fref0_, fref1_;
   std::vector<State> state_;
   Eigen::SparseMatrix<double> W_;  // A_G^T M_G^-1 A_G: the Delassus operator of the grains
   Eigen::VectorXd a_p_;            // the pressure row of A
@@ -504,9 +544,37 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
   }
 }
 
-// The step at compliance `compliance` (CdPathSettings::compliance); f empty where it fails.
+// The states of a guess's forces, and the forces made to obey them strictly: a touching
+// pair (or the probed one) with fn above 1e-7 F0 (the lp probe's state tolerance) is closed,
+// else open with f = 0; a closed pair within 1e-7 F0 of the cone's edge slides against its
+// force (ft = -s mu fn), else it sticks. The path then starts at the guess
+// (StepPath::start_at).
+void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess& guess, double margin) {
+  const int nc = pb.num_contacts();
+  const double mu = pb.system.mu, F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
+  std::vector<State> states(nc, State::kOpen);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * nc);
+  for (int k = 0; k < nc; ++k) {
+    const double fn = guess.f[2 * k], ft = guess.f[2 * k + 1];
+    if (!(k == pb.probed || (fn > 1e-7 * F0 && pb.g_eff[k] <= 0.0))) continue;
+    f[2 * k] = std::max(fn, 1e-9 * F0);
+    if (mu == 0.0) {
+      states[k] = State::kFrictionless;
+    } else if (mu * f[2 * k] - std::abs(ft) <= 1e-7 * F0) {
+      states[k] = ft > 0.0 ? State::kSlideMinus : State::kSlidePlus;
+      f[2 * k + 1] = -slip_sign(states[k]) * mu * f[2 * k];
+    } else {
+      states[k] = State::kStick;
+      f[2 * k + 1] = ft;
+    }
+  }
+  path.start_at(states, f, guess.q / dt2, margin);
+}
+
+// The step at compliance `compliance` (CdPathSettings::compliance), followed from the static
+// network or from `guess`; f empty where it fails.
 CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
-                      double compliance, CdPathStats& stats) {
+                      const CdStepGuess* guess, double compliance, CdPathStats& stats) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   // The static network, its tangential forces drawn into the cone's interior by distinct
@@ -517,12 +585,16 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   for (int k = 0; k < nc; ++k) f0[2 * k + 1] *= 1.0 - 1e-9 * (1.0 + static_cast<double>(k) / nc);
   StepPath path(pb, f0, compliance * pb.g / (dt2 * F0), ps.max_updated_rows);
 
-  // The static network: loaded pairs closed (sticking), every other pair open.
-  std::vector<State> start(nc, State::kOpen);
-  for (int k = 0; k < nc; ++k)
-    if ((f0[2 * k] > 0.0 && pb.g_eff[k] <= 0.0) || k == contact)
-      start[k] = pb.system.mu > 0.0 ? State::kStick : State::kFrictionless;
-  path.start(start);
+  if (guess) {
+    start_from_guess(path, pb, *guess, ps.guess_margin);
+  } else {
+    // The static network: loaded pairs closed (sticking), every other pair open.
+    std::vector<State> start(nc, State::kOpen);
+    for (int k = 0; k < nc; ++k)
+      if ((f0[2 * k] > 0.0 && pb.g_eff[k] <= 0.0) || k == contact)
+        start[k] = pb.system.mu > 0.0 ? State::kStick : State::kFrictionless;
+    path.start(start);
+  }
 
   CdStepSolution sol;
   Eigen::VectorXd x0, x1;
@@ -570,9 +642,45 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
 
 }  // namespace
 
+CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings) {
+  KinematicProbeSettings ks;
+  ks.g = pb.g;
+  ks.touch_gap = settings.touch_gap;
+  ks.M_lambda = settings.bath.M_lambda;
+  KinematicProbe probe(packing, ks);
+  const int contact = pb.system.contacts[pb.probed];
+  const ProbeResult r = probe.probe(contact);
+  const ForceNetwork net = probe.network();
+  const EquilibriumSystem& sys = probe.system();
+  std::vector<int> position(packing.contacts.size(), -1);
+  for (int k = 0; k < pb.num_contacts(); ++k) position[pb.system.contacts[k]] = k;
+  CdStepGuess guess;
+  guess.f = Eigen::VectorXd::Zero(2 * pb.num_contacts());
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    const int kc = position[sys.contacts[k]];
+    guess.f[2 * kc] = net.fn[k];
+    guess.f[2 * kc + 1] = sys.mu > 0.0 ? net.ft[k] : 0.0;
+  }
+  guess.q = Eigen::VectorXd::Zero(pb.system.A.rows());
+  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
+    const int id = pb.system.grains[i];
+    guess.q[3 * i] = r.u[id].x();
+    guess.q[3 * i + 1] = r.u[id].y();
+    guess.q[3 * i + 2] = r.u_rot[id] * packing.particles.radius[id];
+  }
+  guess.q[pb.system.pressure_row()] = r.lambda_dt;
+  return guess;
+}
+
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
+  CdStepGuess lp_guess;
+  const CdStepGuess* guess = nullptr;
+  if (ps.start == CdPathStart::lp_optimum) {
+    lp_guess = lp_optimum_guess(packing, pb, settings);
+    guess = &lp_guess;
+  }
   // The compliance trades the conditioning of the sticking set's system against its own
   // displacements; where the path at ps.compliance is not exact, it is followed again at ten
   // times it, then a tenth of it, and the solution with the lowest residual is kept.
@@ -581,7 +689,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   for (const double factor : {1.0, 10.0, 0.1}) {
     if (factor != 1.0 && !ps.retry) break;
     CdPathStats stats;
-    CdStepSolution sol = follow(pb, packing, ps, factor * ps.compliance, stats);
+    CdStepSolution sol = follow(pb, packing, ps, guess, factor * ps.compliance, stats);
     stats.attempts = best_stats.attempts + 1;
     const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
     if (better || best_stats.attempts == 0) {

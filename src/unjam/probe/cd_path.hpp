@@ -36,7 +36,15 @@
 
 namespace unjam {
 
+// Where the path starts (docs/probe.md, "Where the path starts"): the static network (the
+// solution connected to it, which the step's dynamics from rest reach), or the LP optimum's
+// network and kinematic field (probe/kinematic_probe), itself an exact solution of the
+// quasi-static step, from which the path reaches the solution of the step nearest to it.
+enum class CdPathStart { static_network, lp_optimum };
+
 struct CdPathSettings {
+  CdPathStart start = CdPathStart::static_network;
+  double guess_margin = 1e-6;  // start from a guess: displacement conditions strict by this (g)
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
@@ -58,6 +66,15 @@ struct CdPathStats {
 // Forces whose residual (g, F0) exceeds this are no solution; between kExactStepTolerance
 // and this, the probe is kept but not converged.
 inline constexpr double kMaxPathResidual = 1e-3;
+
+// A start of the path other than the static network: forces (fn_0, ft_0, ...) and the
+// generalised displacement q over the step, in the order of the step's system.
+struct CdStepGuess {
+  Eigen::VectorXd f, q;
+};
+
+// The LP optimum of the probed contact (F_crit = fn_max) and its kinematic field, as a guess.
+CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& step, const ProbeSettings& settings);
 
 // Solves the step of probing packing.contacts[contact] (settings.g, dt, touch_gap, bath).
 // result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.

@@ -43,6 +43,8 @@ class KinematicProbe {
   // set (not touching and carrying no force).
   ProbeResult probe(int contact);
   const EquilibriumSystem& system() const { return system_; }
+  // The optimal network of the last probe, in the order of system().contacts.
+  ForceNetwork network() const { return lp_.network(); }
 
  private:
   const Packing* packing_;

@@ -17,6 +17,7 @@
 #include "unjam/analysis/response_average.hpp"
 #include "unjam/core/work_source.hpp"
 #include "unjam/packing/packing.hpp"
+#include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
 
@@ -29,6 +30,10 @@ enum class ProbeMethod {
   kCd,    // the same step followed exactly from the static network (sparse: probe/cd_path)
 };
 
+// "static", "lp"; cd_start_from_name throws unjam::Error for any other name.
+const char* cd_start_name(CdPathStart start);
+CdPathStart cd_start_from_name(const std::string& name);
+
 // "lp", "nlgs", "lemke", "cd"; method_from_name throws unjam::Error for any other name.
 const char* method_name(ProbeMethod method);
 ProbeMethod method_from_name(const std::string& name);
@@ -37,11 +42,15 @@ struct CampaignSettings {
   ProbeMethod method = ProbeMethod::kLp;
   ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS and Lemke probes
   KinematicProbeSettings kinematic;     // g, LP and state tolerances of the fast probe
+  CdPathStart cd_start = CdPathStart::static_network;  // where the cd method's path starts
   bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
   double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
   int sample = 0;                       // > 0: a random subset of this many contacts
   std::uint64_t seed = 1;               // of the subset
 };
+
+// The cd method's path settings of a campaign (probe/cd_path.hpp).
+CdPathSettings cd_path_settings(const CampaignSettings& settings);
 
 // One probed contact (forces in simulation units, as contacts.csv).
 struct ProbeRow {
