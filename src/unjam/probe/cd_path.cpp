@@ -210,7 +210,10 @@ class StepPath {
   // with S_b the last factorised matrix, E the unit columns of the rows changed since and
   // D^T their changes, and (Woodbury)
   //     S^-1 y = z - Z C^-1 D^T z,   z = S_b^-1 y,   Z = S_b^-1 E,   C = I + D^T Z.
-  // S is factorised afresh once max_updated_rows rows have changed or C is nearly singular.
+  // S is factorised afresh once max_updated_rows rows have changed or C is singular. A C
+  // that is merely ill-conditioned is kept: with a compliance-regularised S_b its condition
+  // estimate is small on most pieces without the updated solves being inaccurate, and an
+  // inaccurate one is caught by the backward-error check of every solve (solve_reduced).
   bool set_state(int k, State s) {
     state_[k] = s;
     if (rows_.size() + 2 > max_updated_rows_) return factorize();
@@ -475,7 +478,7 @@ class StepPath {
   mutable Klu lu_;
   bool reuse_pivots_ = true;
   // The rows changed since S_b (see set_state): their slots, Z = S_b^-1 E, D^T, C's LU.
-  static constexpr double kMinCapacitanceRcond = 1e-10;
+  static constexpr double kMinCapacitanceRcond = 0.0;  // i.e. only a singular C
   std::vector<State> base_state_;
   std::vector<int> slot_;
   std::vector<int> rows_;
