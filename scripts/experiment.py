@@ -5,6 +5,7 @@ Usage:  /usr/bin/python3 scripts/experiment.py --scale demo|tiny|paper [--out ru
                                                [--mpi K [--mpirun LAUNCHER]]
                                                [--mus ...] [--ns ...] [--seeds ...]
                                                [--probe-g G] [--samples S]
+                                               [--skip fixed fig4 probe-one]
 
 Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subprocess):
 
@@ -22,6 +23,11 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
                (docs/results/README.md), agree / disagree per finding, parameters, timings, figures.
+
+--skip leaves out the optional stages named: fixed (the fixed-packing series, fixed.csv and the
+Fig. 3 inset), fig4 (the 50-disk ensemble and Fig. 4), probe-one (the single probe's field), e.g.
+when a run at new sizes only needs the sweep, Fig. 2 and Fig. 3.  The sweep's pack and probe
+stages are the same with or without it, so their cached results stay valid either way.
 
 Caching and resume: every stage records its command and parameters in a stage.json next to its
 output (a packing directory holds the records of its pack and probe stages; OUT/stage.json those
@@ -52,7 +58,7 @@ import sys
 import time
 
 from experiment_report import write_report
-from experiment_stages import REPO, SCALES, build
+from experiment_stages import REPO, SCALES, SKIPPABLE, build
 from stage_runner import Runner, StageError
 
 
@@ -80,6 +86,12 @@ def parse_args(argv):
                         "--threads threads); results do not depend on it")
     p.add_argument("--mpirun", default="mpirun",
                    help="the MPI launcher of --mpi, split like a shell word list (default mpirun)")
+    p.add_argument("--skip", nargs="+", default=[], choices=SKIPPABLE, metavar="STAGE",
+                   help="leave out these optional stages (any of: " + ", ".join(SKIPPABLE)
+                        + "): fixed = the fixed-packing series, its table and the Fig. 3 inset; "
+                        "fig4 = the ensemble and Fig. 4; probe-one = the single probe's field. "
+                        "Default: none (every stage runs); the pack and probe stages of the "
+                        "sweep do not depend on it")
     args = p.parse_args(argv)
     # Every override is checked here, before any stage runs (unjam would refuse the same
     # values only when their stage starts, hours into a run).
@@ -132,7 +144,8 @@ def main(argv=None):
         return 1
     stages, figures = build(args, cfg, R)
     print(f"experiment: scale {args.scale}, mu {cfg['mus']}, N {cfg['ns']}, seeds "
-          f"{cfg['seeds']}, {len(stages)} stages -> {out}", flush=True)
+          f"{cfg['seeds']}, {len(stages)} stages -> {out}"
+          + (f" (skipped: {', '.join(args.skip)})" if args.skip else ""), flush=True)
     try:
         R.execute(stages)
         command = [sys.executable, os.path.relpath(os.path.abspath(__file__), REPO)] + argv
@@ -147,7 +160,8 @@ def main(argv=None):
     print(f"experiment: done in {time.time() - R.t0:.1f} s: {ran} stage(s) ran, "
           f"{len(R.timings) - ran} skipped (cached)")
     print(f"  report:  {os.path.join(out, 'report.md')}")
-    print(f"  tables:  {os.path.join(out, 'sweep.csv')}, {os.path.join(out, 'fixed.csv')}")
+    tables = ["sweep.csv"] + ([] if "fixed" in args.skip else ["fixed.csv"])
+    print(f"  tables:  {', '.join(os.path.join(out, t) for t in tables)}")
     for _, f in figures:
         print(f"  figure:  {f}")
     return 0

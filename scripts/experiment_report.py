@@ -129,17 +129,21 @@ def write_report(path, args, cfg, R, figures, command):
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",
           f"- unjam: `{R.unjam}`, version `{R.version}`",
+          *([f"- skipped stages (--skip): {', '.join(args.skip)}"] if args.skip else []),
           f"- threads: {args.threads or 'all cores'}"
           + (f" per rank, probe stages over {args.mpi} MPI ranks (`{' '.join(R.launcher)}`)"
              if args.mpi else ""),
           f"- command line: `{quote(command)}`", "",
           "## Timings", "",
           "This run: 'ran' stages were computed now, 'cached' ones were skipped; the last column "
-          "is the time the stage took when it was computed.", "",
-          "| stage | what | this run | s this run | s when computed |", "|---|---|---|---|---|"]
-    for name, what, action, dt, dt0 in R.timings:
-        L.append(f"| {name} | `{what}` | {action} | {dt:.1f} | {dt0:.1f} |")
-    L.append(f"| total | | | {time.time() - R.t0:.1f} | |")
+          "is the time the stage took when it was computed (wall, and CPU of its commands; "
+          "a stage resumed after a stop counts the resumed part only).", "",
+          "| stage | what | this run | s this run | s when computed | CPU s when computed |",
+          "|---|---|---|---|---|---|"]
+    for name, what, action, dt, dt0, cpu0 in R.timings:
+        cpu = "—" if cpu0 is None else f"{cpu0:.1f}"
+        L.append(f"| {name} | `{what}` | {action} | {dt:.1f} | {dt0:.1f} | {cpu} |")
+    L.append(f"| total | | | {time.time() - R.t0:.1f} | | |")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(L) + "\n")
     os.replace(path + ".tmp", path)

@@ -34,6 +34,8 @@ FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # ~1e-4 R_max that count as 2-15 redundant contacts at N = 500-2000 (docs/method.md).
 FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
 FIG1_MU = 0.5
+# The optional stages that `--skip` can leave out (scripts/experiment.py).
+SKIPPABLE = ["fixed", "fig4", "probe-one"]
 PROBE_OUTPUTS = ["probes.csv", "response_field.csv", "response_profile.csv",
                  "probe_summary.json", "probe_checkpoint.json"]
 
@@ -243,21 +245,24 @@ def build(args, cfg, R):
     out = R.out
     sweep = sweep_packings(cfg, out)
     of = {(p["mu"], p["n"], p["seed"]): p for p in sweep}
+    skip = set(getattr(args, "skip", None) or [])
     n0, s0 = cfg["ns"][0], cfg["seeds"][0]
-    source = of.get((0, n0, s0))                 # the fixed series exists when mu = 0 is swept
+    # the fixed series exists when mu = 0 is swept and it is not skipped
+    source = None if "fixed" in skip else of.get((0, n0, s0))
     fixed = fixed_packings(cfg, out, source) if source else []
     stages = packing_stages(R, sweep, args.probe_g, cfg["probe_sample"])
     stages += packing_stages(R, fixed, args.probe_g, cfg["probe_sample"])
 
     # Fig. 4
-    d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
-    stages.append(pack_stage(R, "pack fig4", d4, ["--n", FIG4["n"], "--mu", fmt_mu(FIG4["mu"]),
-                                                  "--seed", FIG4["seed"]]))
-    stages.append(ensemble_stage(R, d4, cfg["samples"]))
     fig4 = os.path.join(out, "fig4-ensemble.png")
-    stages.append(plot_stage(R, "plot fig4", [fig4],
-                             [[PY, os.path.join(SCRIPTS, "plot_fig4.py"), d4, "--out", fig4]],
-                             ["ensemble fig4"]))
+    if "fig4" not in skip:
+        d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
+        stages.append(pack_stage(R, "pack fig4", d4, ["--n", FIG4["n"], "--mu",
+                                                      fmt_mu(FIG4["mu"]), "--seed", FIG4["seed"]]))
+        stages.append(ensemble_stage(R, d4, cfg["samples"]))
+        stages.append(plot_stage(R, "plot fig4", [fig4],
+                                 [[PY, os.path.join(SCRIPTS, "plot_fig4.py"), d4, "--out", fig4]],
+                                 ["ensemble fig4"]))
     # Tables
     sweep_csv = os.path.join(out, "sweep.csv")
     fixed_csv = os.path.join(out, "fixed.csv")
@@ -298,14 +303,18 @@ def build(args, cfg, R):
         [p1["probe"]]))
     # One probe's own displacement field: the contact of largest normal force of that packing.
     fig_one = os.path.join(out, "fig-probe-field.png")
-    stages.append(probe_one_stage(R, p1, args.probe_g, os.path.join(out, "probe-one"), fig_one))
+    if "probe-one" not in skip:
+        stages.append(probe_one_stage(R, p1, args.probe_g, os.path.join(out, "probe-one"),
+                                      fig_one))
     figures = [(f"Fig. 1: mean displacement field, N = {nmax}, mu = {fmt_mu(mu1)}", fig1f),
                (f"Fig. 1: the packing and its force chains, N = {nmax}, mu = {fmt_mu(mu1)}",
                 fig1p),
-               (f"One probe's displacement field (the contact of largest force), N = {nmax}, "
-                f"mu = {fmt_mu(mu1)}", fig_one),
+               *([(f"One probe's displacement field (the contact of largest force), N = {nmax}, "
+                   f"mu = {fmt_mu(mu1)}", fig_one)] if "probe-one" not in skip else []),
                (f"Fig. 2: d(r) per mu, N = {nmax}", fig2),
                *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
-               ("Fig. 3: friction sweep (with the fixed-packing inset)", fig3),
-               (f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
+               ("Fig. 3: friction sweep" + (" (with the fixed-packing inset)" if source else ""),
+                fig3),
+               *([(f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
+                 if "fig4" not in skip else [])]
     return stages, figures

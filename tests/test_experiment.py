@@ -189,6 +189,37 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(d, "probe_summary.json")) as f:
             self.assertEqual(len(json.load(f)["ranks"]), 2)
 
+    def test_7_skip_leaves_out_the_optional_stages_only(self):
+        # --skip fixed fig4 probe-one: the sweep's stages stay cached, Fig. 3 is redrawn
+        # without the inset; the default run afterwards has every stage again, and only
+        # Fig. 3 is redrawn (with the inset). (--probe-g as left by test_4.)
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--skip", "fixed", "fig4", "probe-one"))
+        self.assertEqual(len(res), 10)
+        self.assertFalse(any(k.startswith(("pack fixed", "probe fixed", "pack fig4")) or
+                             k in ("table fixed", "ensemble fig4", "plot fig4", "probe one")
+                             for k in res), res)
+        self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
+        with open(os.path.join(self.out, "stage.json")) as f:
+            self.assertGreaterEqual(json.load(f)["plot fig3"]["cpu_seconds"], 0)
+        res = outcomes(run(self.out, "--probe-g", "2e-9"))
+        self.assertEqual(len(res), 19)
+        self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
+
+    def test_8_merge_sweep_rebuilds_the_table_from_the_packings(self):
+        # scripts/merge_sweep.py: rows read from the probed packings are the table's own rows
+        dirs = [os.path.join(self.out, "packings", f"N100-mu{mu}-s1") for mu in ("1", "0", "0.1")]
+        merged = os.path.join(self.tmp, "merged.csv")
+        with open(os.path.join(self.out, "sweep.csv")) as f:
+            header = f.readline()
+        with open(merged, "w", newline="") as f:
+            f.write(header)
+        p = subprocess.run([sys.executable, os.path.join(REPO, "scripts", "merge_sweep.py"),
+                            merged, "--packings", *dirs], capture_output=True, text=True,
+                           timeout=60)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(merged) as f, open(os.path.join(self.out, "sweep.csv")) as g:
+            self.assertEqual(f.read(), g.read())
+
 
 @unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
                      f"{UNJAM} is missing")
