@@ -15,10 +15,15 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   fixed        the mu = 0 packing of the first N and seed re-relaxed at every other mu
                (`unjam pack --from`) into OUT/fixed/N{N}-mu{mu}, probed the same way
                (the paper's Fig. 3b inset);
+  exact        with --cd-sample K > 0 (20 at the paper scale), on the sweep's packings of at
+               most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd`
+               (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
+               the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
   probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
                --contact K`) and its displacement field drawn (plot_probe_field.py);
-  tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json);
+  tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),
+               OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing);
   figures      fig3-friction-sweep.png, fig2-profiles.png (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
@@ -79,6 +84,12 @@ def parse_args(argv):
     p.add_argument("--samples", type=int, help="override the scale's ensemble samples (Fig. 4)")
     p.add_argument("--probe-sample", type=int, help="override the scale's contacts probed per "
                    "packing (a seeded subset; 0 = all)")
+    p.add_argument("--cd-sample", type=int, help="override the scale's contacts per packing "
+                   "probed by the exact probe (--method cd) and by lp on the same contacts, "
+                   "side by side in report.md (0 = none; default: 20 at the paper scale, 0 "
+                   "otherwise)")
+    p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
+                   "this many disks (default 500: its reach with friction, docs/probe.md)")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -101,6 +112,10 @@ def parse_args(argv):
         p.error("--threads must be >= 0")
     if args.probe_sample is not None and args.probe_sample < 0:
         p.error("--probe-sample must be >= 0")
+    if args.cd_sample is not None and args.cd_sample < 0:
+        p.error(f"--cd-sample must be >= 0, got {args.cd_sample}")
+    if args.cd_max_n is not None and args.cd_max_n < 0:
+        p.error(f"--cd-max-n must be >= 0, got {args.cd_max_n}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -122,7 +137,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
-    for k in ("mus", "ns", "seeds", "samples", "probe_sample"):
+    for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))
@@ -160,7 +175,8 @@ def main(argv=None):
     print(f"experiment: done in {time.time() - R.t0:.1f} s: {ran} stage(s) ran, "
           f"{len(R.timings) - ran} skipped (cached)")
     print(f"  report:  {os.path.join(out, 'report.md')}")
-    tables = ["sweep.csv"] + ([] if "fixed" in args.skip else ["fixed.csv"])
+    tables = (["sweep.csv"] + ([] if "fixed" in args.skip else ["fixed.csv"])
+              + (["exact-probe.csv"] if cfg["cd_sample"] > 0 else []))
     print(f"  tables:  {', '.join(os.path.join(out, t) for t in tables)}")
     for _, f in figures:
         print(f"  figure:  {f}")
