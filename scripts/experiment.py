@@ -5,6 +5,7 @@ Usage:  /usr/bin/python3 scripts/experiment.py --scale demo|tiny|paper [--out ru
                                                [--mpi K [--mpirun LAUNCHER]]
                                                [--mus ...] [--ns ...] [--seeds ...]
                                                [--probe-g G] [--samples S]
+                                               [--skip fixed fig4 probe-one]
 
 Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subprocess):
 
@@ -14,14 +15,24 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   fixed        the mu = 0 packing of the first N and seed re-relaxed at every other mu
                (`unjam pack --from`) into OUT/fixed/N{N}-mu{mu}, probed the same way
                (the paper's Fig. 3b inset);
+  exact        with --cd-sample K > 0 (20 at the paper scale), on the sweep's packings of at
+               most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd`
+               (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
+               the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
   probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
                --contact K`) and its displacement field drawn (plot_probe_field.py);
-  tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json);
+  tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),
+               OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing);
   figures      fig3-friction-sweep.png, fig2-profiles.png (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
                (docs/results/README.md), agree / disagree per finding, parameters, timings, figures.
+
+--skip leaves out the optional stages named: fixed (the fixed-packing series, fixed.csv and the
+Fig. 3 inset), fig4 (the 50-disk ensemble and Fig. 4), probe-one (the single probe's field), e.g.
+when a run at new sizes only needs the sweep, Fig. 2 and Fig. 3.  The sweep's pack and probe
+stages are the same with or without it, so their cached results stay valid either way.
 
 Caching and resume: every stage records its command and parameters in a stage.json next to its
 output (a packing directory holds the records of its pack and probe stages; OUT/stage.json those
@@ -52,7 +63,7 @@ import sys
 import time
 
 from experiment_report import write_report
-from experiment_stages import REPO, SCALES, build
+from experiment_stages import REPO, SCALES, SKIPPABLE, build
 from stage_runner import Runner, StageError
 
 
@@ -73,6 +84,12 @@ def parse_args(argv):
     p.add_argument("--samples", type=int, help="override the scale's ensemble samples (Fig. 4)")
     p.add_argument("--probe-sample", type=int, help="override the scale's contacts probed per "
                    "packing (a seeded subset; 0 = all)")
+    p.add_argument("--cd-sample", type=int, help="override the scale's contacts per packing "
+                   "probed by the exact probe (--method cd) and by lp on the same contacts, "
+                   "side by side in report.md (0 = none; default: 20 at the paper scale, 0 "
+                   "otherwise)")
+    p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
+                   "this many disks (default 500: its reach with friction, docs/probe.md)")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -80,6 +97,12 @@ def parse_args(argv):
                         "--threads threads); results do not depend on it")
     p.add_argument("--mpirun", default="mpirun",
                    help="the MPI launcher of --mpi, split like a shell word list (default mpirun)")
+    p.add_argument("--skip", nargs="+", default=[], choices=SKIPPABLE, metavar="STAGE",
+                   help="leave out these optional stages (any of: " + ", ".join(SKIPPABLE)
+                        + "): fixed = the fixed-packing series, its table and the Fig. 3 inset; "
+                        "fig4 = the ensemble and Fig. 4; probe-one = the single probe's field. "
+                        "Default: none (every stage runs); the pack and probe stages of the "
+                        "sweep do not depend on it")
     args = p.parse_args(argv)
     # Every override is checked here, before any stage runs (unjam would refuse the same
     # values only when their stage starts, hours into a run).
@@ -89,6 +112,10 @@ def parse_args(argv):
         p.error("--threads must be >= 0")
     if args.probe_sample is not None and args.probe_sample < 0:
         p.error("--probe-sample must be >= 0")
+    if args.cd_sample is not None and args.cd_sample < 0:
+        p.error(f"--cd-sample must be >= 0, got {args.cd_sample}")
+    if args.cd_max_n is not None and args.cd_max_n < 0:
+        p.error(f"--cd-max-n must be >= 0, got {args.cd_max_n}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -110,7 +137,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
-    for k in ("mus", "ns", "seeds", "samples", "probe_sample"):
+    for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))
@@ -132,7 +159,8 @@ def main(argv=None):
         return 1
     stages, figures = build(args, cfg, R)
     print(f"experiment: scale {args.scale}, mu {cfg['mus']}, N {cfg['ns']}, seeds "
-          f"{cfg['seeds']}, {len(stages)} stages -> {out}", flush=True)
+          f"{cfg['seeds']}, {len(stages)} stages -> {out}"
+          + (f" (skipped: {', '.join(args.skip)})" if args.skip else ""), flush=True)
     try:
         R.execute(stages)
         command = [sys.executable, os.path.relpath(os.path.abspath(__file__), REPO)] + argv
@@ -147,7 +175,9 @@ def main(argv=None):
     print(f"experiment: done in {time.time() - R.t0:.1f} s: {ran} stage(s) ran, "
           f"{len(R.timings) - ran} skipped (cached)")
     print(f"  report:  {os.path.join(out, 'report.md')}")
-    print(f"  tables:  {os.path.join(out, 'sweep.csv')}, {os.path.join(out, 'fixed.csv')}")
+    tables = (["sweep.csv"] + ([] if "fixed" in args.skip else ["fixed.csv"])
+              + (["exact-probe.csv"] if cfg["cd_sample"] > 0 else []))
+    print(f"  tables:  {', '.join(os.path.join(out, t) for t in tables)}")
     for _, f in figures:
         print(f"  figure:  {f}")
     return 0

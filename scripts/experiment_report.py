@@ -83,6 +83,35 @@ def findings(agg, fixed_agg, n_max):
     return out
 
 
+def exact_probe_section(path):
+    """Report lines comparing the exact probe (cd) with lp on the same contacts, from
+    OUT/exact-probe.csv (none when the table does not exist)."""
+    if not os.path.isfile(path):
+        return []
+    groups = {}
+    for r in read_table(path):
+        key = (round(sweep_table.number(r["mu"]), sweep_table.MU_DIGITS), int(r["N"]))
+        groups.setdefault(key, []).append(r)
+    mean = lambda g, c: sweep_table.mean_std([sweep_table.number(r[c]) for r in g])  # noqa: E731
+    L = ["", "## The exact probe beside lp", "",
+         "The paper's probe step solved exactly (`--method cd`: the path from the static network, "
+         "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
+         "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
+         "Probes whose step has no solution on the path are left out of the cd means "
+         "(column 'not exact' counts them with the near-exact ones).", "",
+         "| mu | N | seeds | probes | not exact | <F_crit>/<F_cont> lp | <F_crit>/<F_cont> cd | "
+         "alpha lp | alpha cd | CPU s per cd probe |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for (mu, n), g in sorted(groups.items()):
+        probes = sum(int(r["probes"]) for r in g)
+        bad = sum(int(r["not_exact"]) for r in g)
+        L.append(f"| {fmt_mu(mu)} | {n} | {len(g)} | {probes} | {bad} | "
+                 + " | ".join(pm(mean(g, c)) for c in ("F_crit_over_F_cont_lp",
+                                                       "F_crit_over_F_cont_cd", "alpha_lp",
+                                                       "alpha_cd"))
+                 + f" | {mean(g, 'cpu_s_per_probe_cd')[0]:.2f} |")
+    return L
+
+
 def write_report(path, args, cfg, R, figures, command):
     """OUT/report.md from OUT/sweep.csv and OUT/fixed.csv; command: the experiment's command
     line (a list)."""
@@ -108,6 +137,7 @@ def write_report(path, args, cfg, R, figures, command):
         for (mu, n), a in fixed_agg.items():
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+    L += exact_probe_section(os.path.join(out, "exact-probe.csv"))
     L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
           "| finding | paper | measured | verdict |", "|---|---|---|---|"]
     for f, paper, meas, verdict in findings(agg, fixed_agg, n_max):
@@ -126,20 +156,27 @@ def write_report(path, args, cfg, R, figures, command):
           f"- probe: lp, g = {args.probe_g:g}, "
           + (f"{cfg['probe_sample']} contacts per packing (seeded subset)" if cfg["probe_sample"]
              else "every force-carrying contact"),
+          f"- exact probe (cd) beside lp: "
+          + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}"
+             if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",
           f"- unjam: `{R.unjam}`, version `{R.version}`",
+          *([f"- skipped stages (--skip): {', '.join(args.skip)}"] if args.skip else []),
           f"- threads: {args.threads or 'all cores'}"
           + (f" per rank, probe stages over {args.mpi} MPI ranks (`{' '.join(R.launcher)}`)"
              if args.mpi else ""),
           f"- command line: `{quote(command)}`", "",
           "## Timings", "",
           "This run: 'ran' stages were computed now, 'cached' ones were skipped; the last column "
-          "is the time the stage took when it was computed.", "",
-          "| stage | what | this run | s this run | s when computed |", "|---|---|---|---|---|"]
-    for name, what, action, dt, dt0 in R.timings:
-        L.append(f"| {name} | `{what}` | {action} | {dt:.1f} | {dt0:.1f} |")
-    L.append(f"| total | | | {time.time() - R.t0:.1f} | |")
+          "is the time the stage took when it was computed (wall, and CPU of its commands; "
+          "a stage resumed after a stop counts the resumed part only).", "",
+          "| stage | what | this run | s this run | s when computed | CPU s when computed |",
+          "|---|---|---|---|---|---|"]
+    for name, what, action, dt, dt0, cpu0 in R.timings:
+        cpu = "—" if cpu0 is None else f"{cpu0:.1f}"
+        L.append(f"| {name} | `{what}` | {action} | {dt:.1f} | {dt0:.1f} | {cpu} |")
+    L.append(f"| total | | | {time.time() - R.t0:.1f} | | |")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(L) + "\n")
     os.replace(path + ".tmp", path)

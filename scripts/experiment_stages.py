@@ -20,20 +20,32 @@ PY = sys.executable or "/usr/bin/python3"
 
 # The scales, as data.  samples: ensemble networks for Fig. 4; probe_sample: contacts probed
 # per packing (a seeded subset; 0 = every force-carrying contact).
+# cd_sample: contacts per packing probed by the exact probe (`--method cd`) and, for the
+# comparison, by lp on the same contacts (0: none), on the packings of N <= cd_max_n: the
+# exact probe costs ~10-15 s per probe at 500 disks with friction and does not reach a
+# solution at 2000 (docs/probe.md, "What limits it").
 SCALES = {
-    "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0},
+    "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
+             "cd_sample": 0, "cd_max_n": 500},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
-             "probe_sample": 0},
+             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
-              "probe_sample": 1000},
+              "probe_sample": 1000, "cd_sample": 20, "cd_max_n": 500},
 }
+# The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
+# cd probes whose step was not solved exactly (without a solution: left out of the means;
+# with a residual of 1e-6 to 1e-3 g: kept); alpha empty where the fit failed.
+EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "F_crit_over_F_cont_lp",
+                 "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd"]
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
 # F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
 # ~1e-4 R_max that count as 2-15 redundant contacts at N = 500-2000 (docs/method.md).
 FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
 FIG1_MU = 0.5
+# The optional stages that `--skip` can leave out (scripts/experiment.py).
+SKIPPABLE = ["fixed", "fig4", "probe-one"]
 PROBE_OUTPUTS = ["probes.csv", "response_field.csv", "response_profile.csv",
                  "probe_summary.json", "probe_checkpoint.json"]
 
@@ -86,6 +98,74 @@ def probe_stage(R, name, d, g, sample, dep):
         R.call(st, R.unjam_cmd("probe", d, *args, "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
+
+
+def exact_probe_dirs(d):
+    """{method: output directory} of the exact-probe comparison of packing directory d."""
+    return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
+
+
+def exact_probe_stage(R, name, d, g, sample, dep):
+    """The exact probe (`unjam probe --sample K --method cd`) and the lp probe of the same
+    seeded contacts, into d/exact-cd and d/exact-lp: the paper's probe beside the stand-in."""
+    outs = exact_probe_dirs(d)
+    args = {m: ["--sample", str(sample), "--seed", "1", "--method", m, "--g", repr(g)]
+            for m in outs}
+    params = {"commands": [["unjam", "probe", d] + args[m] for m in sorted(outs)],
+              "version": R.version}
+
+    def run(st):
+        for m in ("lp", "cd"):
+            if not st.resume:
+                for f in PROBE_OUTPUTS:
+                    p = os.path.join(outs[m], f)
+                    if os.path.exists(p):
+                        os.remove(p)
+            if not probe_done(outs[m]):
+                R.call(st, R.unjam_cmd("probe", d, *args[m], "--out", outs[m], "--quiet", mpi=True))
+    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
+                 "(and lp)", os.path.join(d, "stage.json"), params, run,
+                 lambda: all(probe_done(o) for o in outs.values()), [dep])
+
+
+def exact_row(d, mu, n, seed):
+    """One row of EXACT_COLUMNS from d/exact-{cd,lp}/probe_summary.json."""
+    s = {m: read_json(os.path.join(o, "probe_summary.json")) for m, o in exact_probe_dirs(d).items()}
+    for m, v in s.items():
+        if v is None:
+            raise StageError(f"{exact_probe_dirs(d)[m]}/probe_summary.json does not read")
+    alpha = lambda v: "" if "fit_error" in v or v.get("alpha") is None else repr(float(v["alpha"]))  # noqa: E731
+    busy = sum(r.get("busy_seconds", 0.0) for r in s["cd"].get("ranks", []))
+    return {"mu": fmt_mu(mu), "N": n, "seed": seed, "probes": s["cd"]["probes"],
+            "not_exact": s["cd"]["not_converged"],
+            "F_crit_over_F_cont_lp": repr(float(s["lp"]["F_crit_over_F_cont"])),
+            "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
+            "alpha_lp": alpha(s["lp"]), "alpha_cd": alpha(s["cd"]),
+            "cpu_s_per_probe_cd": repr(busy / max(1, s["cd"]["probes"]))}
+
+
+def exact_table_stage(R, name, path, entries, deps):
+    """entries: [(dir, mu, N, seed)] -> OUT/exact-probe.csv, one row each."""
+    params = {"table": os.path.relpath(path, R.out),
+              "rows": [[os.path.relpath(d, R.out), mu, n, s] for d, mu, n, s in entries]}
+
+    def run(st):
+        st.record["commands"].append(f"(python) write {path} from {len(entries)} summaries")
+        tmp = path + ".tmp"
+        with open(tmp, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=EXACT_COLUMNS)
+            w.writeheader()
+            w.writerows(exact_row(*e) for e in entries)
+        os.replace(tmp, path)
+
+    def check():
+        try:
+            with open(path) as f:
+                return len(list(csv.DictReader(f))) == len(entries)
+        except OSError:
+            return False
+    return Stage(name, os.path.relpath(path, R.out), os.path.join(R.out, "stage.json"),
+                 params, run, check, deps)
 
 
 def plot_stage(R, name, outputs, cmds, deps):
@@ -243,26 +323,39 @@ def build(args, cfg, R):
     out = R.out
     sweep = sweep_packings(cfg, out)
     of = {(p["mu"], p["n"], p["seed"]): p for p in sweep}
+    skip = set(getattr(args, "skip", None) or [])
     n0, s0 = cfg["ns"][0], cfg["seeds"][0]
-    source = of.get((0, n0, s0))                 # the fixed series exists when mu = 0 is swept
+    # the fixed series exists when mu = 0 is swept and it is not skipped
+    source = None if "fixed" in skip else of.get((0, n0, s0))
     fixed = fixed_packings(cfg, out, source) if source else []
     stages = packing_stages(R, sweep, args.probe_g, cfg["probe_sample"])
     stages += packing_stages(R, fixed, args.probe_g, cfg["probe_sample"])
+    # The exact probe beside lp, where it is affordable.
+    exact = [p for p in sweep if cfg["cd_sample"] > 0 and p["n"] <= cfg["cd_max_n"]]
+    for p in exact:
+        stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
+                                        args.probe_g, cfg["cd_sample"], p["pack"]))
 
     # Fig. 4
-    d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
-    stages.append(pack_stage(R, "pack fig4", d4, ["--n", FIG4["n"], "--mu", fmt_mu(FIG4["mu"]),
-                                                  "--seed", FIG4["seed"]]))
-    stages.append(ensemble_stage(R, d4, cfg["samples"]))
     fig4 = os.path.join(out, "fig4-ensemble.png")
-    stages.append(plot_stage(R, "plot fig4", [fig4],
-                             [[PY, os.path.join(SCRIPTS, "plot_fig4.py"), d4, "--out", fig4]],
-                             ["ensemble fig4"]))
+    if "fig4" not in skip:
+        d4 = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}")
+        stages.append(pack_stage(R, "pack fig4", d4, ["--n", FIG4["n"], "--mu",
+                                                      fmt_mu(FIG4["mu"]), "--seed", FIG4["seed"]]))
+        stages.append(ensemble_stage(R, d4, cfg["samples"]))
+        stages.append(plot_stage(R, "plot fig4", [fig4],
+                                 [[PY, os.path.join(SCRIPTS, "plot_fig4.py"), d4, "--out", fig4]],
+                                 ["ensemble fig4"]))
     # Tables
     sweep_csv = os.path.join(out, "sweep.csv")
     fixed_csv = os.path.join(out, "fixed.csv")
     stages.append(table_stage(R, "table sweep", sweep_csv, [table_entry(p) for p in sweep],
                               [p["probe"] for p in of.values()]))
+    if exact:
+        stages.append(exact_table_stage(
+            R, "table exact", os.path.join(out, "exact-probe.csv"),
+            [table_entry(p) for p in exact],
+            ["exact " + p["probe"][len("probe "):] for p in exact]))
     if source:
         series = [source] + fixed
         stages.append(table_stage(R, "table fixed", fixed_csv,
@@ -298,14 +391,18 @@ def build(args, cfg, R):
         [p1["probe"]]))
     # One probe's own displacement field: the contact of largest normal force of that packing.
     fig_one = os.path.join(out, "fig-probe-field.png")
-    stages.append(probe_one_stage(R, p1, args.probe_g, os.path.join(out, "probe-one"), fig_one))
+    if "probe-one" not in skip:
+        stages.append(probe_one_stage(R, p1, args.probe_g, os.path.join(out, "probe-one"),
+                                      fig_one))
     figures = [(f"Fig. 1: mean displacement field, N = {nmax}, mu = {fmt_mu(mu1)}", fig1f),
                (f"Fig. 1: the packing and its force chains, N = {nmax}, mu = {fmt_mu(mu1)}",
                 fig1p),
-               (f"One probe's displacement field (the contact of largest force), N = {nmax}, "
-                f"mu = {fmt_mu(mu1)}", fig_one),
+               *([(f"One probe's displacement field (the contact of largest force), N = {nmax}, "
+                   f"mu = {fmt_mu(mu1)}", fig_one)] if "probe-one" not in skip else []),
                (f"Fig. 2: d(r) per mu, N = {nmax}", fig2),
                *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
-               ("Fig. 3: friction sweep (with the fixed-packing inset)", fig3),
-               (f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
+               ("Fig. 3: friction sweep" + (" (with the fixed-packing inset)" if source else ""),
+                fig3),
+               *([(f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
+                 if "fig4" not in skip else [])]
     return stages, figures

@@ -12,6 +12,10 @@ stopped) with the same parameters and inputs is marked resumable (stage.resume).
 Commands run as subprocesses with their output appended to LOG_DIR/<stage>.log; on Ctrl-C
 the running command gets SIGINT (unjam then saves its state) and 60 s to stop.  A failed
 command or a stage whose outputs do not check raises StageError.
+
+A stage's record gives its wall time (seconds) and the CPU time of its commands (cpu_seconds:
+user + system of the finished subprocesses, all their threads); a stage resumed after a stop
+records the time of the resumed part only.
 """
 
 import json
@@ -44,6 +48,12 @@ def write_json(path, obj):
         json.dump(obj, f, indent=1, sort_keys=True)
         f.write("\n")
     os.replace(tmp, path)
+
+
+def children_cpu():
+    """User + system CPU seconds of this process's finished (waited-for) child processes."""
+    t = os.times()
+    return t.children_user + t.children_system
 
 
 def nonempty(path):
@@ -83,7 +93,9 @@ class Runner:
         self.threads = threads
         self.log_dir = log_dir
         self.stamps = {}      # stage name -> stamp of its current outputs
-        self.timings = []     # (name, what, action, seconds this run, seconds when computed)
+        # (name, what, action, seconds this run, seconds when computed, CPU seconds when
+        # computed: user + system time of the stage's commands and their children)
+        self.timings = []
         self.t0 = time.time()
 
     def records(self, path):
@@ -104,7 +116,8 @@ class Runner:
             if (old and old.get("status") == "done" and old.get("params") == st.params
                     and old.get("inputs") == inputs and st.check()):
                 self.stamps[st.name] = old["stamp"]
-                self.timings.append((st.name, st.what, "cached", 0.0, old.get("seconds", 0.0)))
+                self.timings.append((st.name, st.what, "cached", 0.0, old.get("seconds", 0.0),
+                                     old.get("cpu_seconds")))
                 print(f"{prefix} ... skipped (cached)  [{self.elapsed()}]", flush=True)
                 continue
             print(f"{prefix} ... running  [{self.elapsed()}]", flush=True)
@@ -112,7 +125,7 @@ class Runner:
                           and old.get("params") == st.params and old.get("inputs") == inputs)
             rec = {"status": "running", "params": st.params, "inputs": inputs,
                    "commands": [], "started": time.strftime("%Y-%m-%dT%H:%M:%S")}
-            t = time.time()
+            t, cpu0 = time.time(), children_cpu()
             st.resume = resume
             st.record = rec
             self.save_record(st, rec)
@@ -120,12 +133,14 @@ class Runner:
             if not st.check():
                 raise StageError(f"stage {st.name}: the outputs are missing or unreadable after "
                                  f"the commands\n  " + "\n  ".join(rec["commands"]))
-            dt = time.time() - t
-            rec.update(status="done", seconds=round(dt, 3), stamp=uuid.uuid4().hex)
+            dt, cpu = time.time() - t, children_cpu() - cpu0
+            rec.update(status="done", seconds=round(dt, 3), cpu_seconds=round(cpu, 3),
+                       stamp=uuid.uuid4().hex)
             self.save_record(st, rec)
             self.stamps[st.name] = rec["stamp"]
-            self.timings.append((st.name, st.what, "ran", dt, dt))
-            print(f"{prefix} ... done in {dt:.1f} s  [{self.elapsed()}]", flush=True)
+            self.timings.append((st.name, st.what, "ran", dt, dt, cpu))
+            print(f"{prefix} ... done in {dt:.1f} s  [cpu {cpu:.1f} s; {self.elapsed()}]",
+                  flush=True)
 
     def elapsed(self):
         return f"{time.time() - self.t0:.1f} s elapsed"

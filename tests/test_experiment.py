@@ -189,6 +189,66 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(d, "probe_summary.json")) as f:
             self.assertEqual(len(json.load(f)["ranks"]), 2)
 
+    def test_7_skip_leaves_out_the_optional_stages_only(self):
+        # --skip fixed fig4 probe-one: the sweep's stages stay cached, Fig. 3 is redrawn
+        # without the inset; the default run afterwards has every stage again, and only
+        # Fig. 3 is redrawn (with the inset). (--probe-g as left by test_4.)
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--skip", "fixed", "fig4", "probe-one"))
+        self.assertEqual(len(res), 10)
+        self.assertFalse(any(k.startswith(("pack fixed", "probe fixed", "pack fig4")) or
+                             k in ("table fixed", "ensemble fig4", "plot fig4", "probe one")
+                             for k in res), res)
+        self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
+        with open(os.path.join(self.out, "stage.json")) as f:
+            self.assertGreaterEqual(json.load(f)["plot fig3"]["cpu_seconds"], 0)
+        res = outcomes(run(self.out, "--probe-g", "2e-9"))
+        self.assertEqual(len(res), 19)
+        self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
+
+    def test_8_merge_sweep_rebuilds_the_table_from_the_packings(self):
+        # scripts/merge_sweep.py: rows read from the probed packings are the table's own rows
+        dirs = [os.path.join(self.out, "packings", f"N100-mu{mu}-s1") for mu in ("1", "0", "0.1")]
+        merged = os.path.join(self.tmp, "merged.csv")
+        with open(os.path.join(self.out, "sweep.csv")) as f:
+            header = f.readline()
+        with open(merged, "w", newline="") as f:
+            f.write(header)
+        p = subprocess.run([sys.executable, os.path.join(REPO, "scripts", "merge_sweep.py"),
+                            merged, "--packings", *dirs], capture_output=True, text=True,
+                           timeout=60)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(merged) as f, open(os.path.join(self.out, "sweep.csv")) as g:
+            self.assertEqual(f.read(), g.read())
+
+    def test_9_exact_probe_beside_lp(self):
+        # --cd-sample 3: the exact probe and lp on the same 3 contacts of every packing, the
+        # sweep's own stages cached (--probe-g as left by test_4); exact-probe.csv holds the
+        # two summaries' numbers and the report shows them side by side.
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3"))
+        exact = {k for k, v in res.items() if k.startswith("exact ")}
+        self.assertEqual(exact, {f"exact N100-mu{mu}-s1" for mu in ("0", "0.1", "1")})
+        self.assertTrue(all(res[k] == "ran" for k in exact | {"table exact"}), res)
+        self.assertTrue(all(res[k] == "cached" for k in res if k.startswith(("pack ", "probe "))),
+                        res)
+        with open(os.path.join(self.out, "exact-probe.csv")) as f:
+            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        self.assertEqual(set(rows), {"0", "0.1", "1"})
+        for mu, r in rows.items():
+            d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1")
+            for m in ("cd", "lp"):
+                with open(os.path.join(d, f"exact-{m}", "probe_summary.json")) as f:
+                    s = json.load(f)
+                self.assertEqual((s["method"], s["probes"], s["settings"]["g"]), (m, 3, 2e-9))
+                self.assertEqual(float(r[f"F_crit_over_F_cont_{m}"]), s["F_crit_over_F_cont"])
+            self.assertEqual(int(r["not_exact"]), 0, r)
+        # mu = 0, isostatic: lp gives F_crit = F_cont; the exact step adds its inertial term
+        self.assertAlmostEqual(float(rows["0"]["F_crit_over_F_cont_lp"]), 1.0, places=6)
+        self.assertGreater(float(rows["0"]["F_crit_over_F_cont_cd"]), 1.0)
+        with open(os.path.join(self.out, "report.md")) as f:
+            report = f.read()
+        self.assertIn("## The exact probe beside lp", report)
+        self.assertIn("| 1 | 100 | 1 | 3 | 0 | ", report)
+
 
 @unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
                      f"{UNJAM} is missing")
