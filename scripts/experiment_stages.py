@@ -144,30 +144,6 @@ def exact_row(d, mu, n, seed):
             "cpu_s_per_probe_cd": repr(busy / max(1, s["cd"]["probes"]))}
 
 
-def exact_table_stage(R, name, path, entries, deps):
-    """entries: [(dir, mu, N, seed)] -> OUT/exact-probe.csv, one row each."""
-    params = {"table": os.path.relpath(path, R.out),
-              "rows": [[os.path.relpath(d, R.out), mu, n, s] for d, mu, n, s in entries]}
-
-    def run(st):
-        st.record["commands"].append(f"(python) write {path} from {len(entries)} summaries")
-        tmp = path + ".tmp"
-        with open(tmp, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=EXACT_COLUMNS)
-            w.writeheader()
-            w.writerows(exact_row(*e) for e in entries)
-        os.replace(tmp, path)
-
-    def check():
-        try:
-            with open(path) as f:
-                return len(list(csv.DictReader(f))) == len(entries)
-        except OSError:
-            return False
-    return Stage(name, os.path.relpath(path, R.out), os.path.join(R.out, "stage.json"),
-                 params, run, check, deps)
-
-
 def plot_stage(R, name, outputs, cmds, deps):
     """A stage of python scripts; outputs are files under OUT."""
     params = {"commands": [[os.path.relpath(c, REPO) if isinstance(c, str) and c.startswith(
@@ -205,23 +181,24 @@ def largest_force_contact(d):
     return max(range(len(fn)), key=lambda k: fn[k])
 
 
-def write_table(path, rows):
+def write_table(path, rows, columns=sweep_table.COLUMNS):
     tmp = path + ".tmp"
     with open(tmp, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=sweep_table.COLUMNS)
+        w = csv.DictWriter(f, fieldnames=columns)
         w.writeheader()
         w.writerows(rows)
     os.replace(tmp, path)
 
 
-def table_stage(R, name, path, entries, deps):
-    """entries: [(dir, mu, N, seed)] -> one row each, from probe_summary.json."""
+def table_stage(R, name, path, entries, deps, columns=sweep_table.COLUMNS, row=summary_row):
+    """entries: [(dir, mu, N, seed)] -> one row each, row(dir, mu, N, seed) (by default from
+    dir/probe_summary.json), in the given columns."""
     params = {"table": os.path.relpath(path, R.out),
               "rows": [[os.path.relpath(d, R.out), mu, n, s] for d, mu, n, s in entries]}
 
     def run(st):
         st.record["commands"].append(f"(python) write {path} from {len(entries)} summaries")
-        write_table(path, [summary_row(d, mu, n, s) for d, mu, n, s in entries])
+        write_table(path, [row(d, mu, n, s) for d, mu, n, s in entries], columns)
 
     def check():
         try:
@@ -352,10 +329,10 @@ def build(args, cfg, R):
     stages.append(table_stage(R, "table sweep", sweep_csv, [table_entry(p) for p in sweep],
                               [p["probe"] for p in of.values()]))
     if exact:
-        stages.append(exact_table_stage(
+        stages.append(table_stage(
             R, "table exact", os.path.join(out, "exact-probe.csv"),
             [table_entry(p) for p in exact],
-            ["exact " + p["probe"][len("probe "):] for p in exact]))
+            ["exact " + p["probe"][len("probe "):] for p in exact], EXACT_COLUMNS, exact_row))
     if source:
         series = [source] + fixed
         stages.append(table_stage(R, "table fixed", fixed_csv,
