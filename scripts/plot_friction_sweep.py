@@ -149,8 +149,12 @@ def main(argv=None):
     handles += [Line2D([], [], color="0.3", marker="o", ls="-", label="full: left axis"),
                 Line2D([], [], color="0.3", marker="o", mfc="white", ls="--", label="open: right axis")]
     height = fig.get_size_inches()[1]
+    # One row of legend up to 5 entries (3 sizes); more sizes wrap into two rows, which the
+    # layout below makes room for.
+    ncol = len(handles) if len(handles) <= 5 else (len(handles) + 1) // 2
+    legend_rows = (len(handles) + ncol - 1) // ncol
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 1 - 0.3 / height),
-               ncol=len(handles), fontsize=8, frameon=False, handlelength=2.2)
+               ncol=ncol, fontsize=8, frameon=False, handlelength=2.2)
 
     if fixed_series is not None:
         ax_c = axes[2]
@@ -173,7 +177,7 @@ def main(argv=None):
     axes[-1].set_xlabel(rf"$\mu$  (symlog axis: linear below {args.linthresh:g})")
     fig.suptitle("Friction dependence of the packings and of their response", fontsize=10,
                  y=1 - 0.08 / height)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.4 / height))
+    fig.tight_layout(rect=(0, 0, 1, 1 - (0.4 + 0.2 * (legend_rows - 1)) / height))
 
     out = args.out or os.path.join(os.path.dirname(os.path.abspath(args.table)), "friction-sweep.png")
     up.save_figure(fig, out)
