@@ -83,6 +83,27 @@ def pack_stage(R, name, d, pack_args, deps=()):
                  os.path.join(d, "stage.json"), params, run, lambda: packing_static(d), deps)
 
 
+def remove_probe_outputs(d):
+    """Deletes a probe run's outputs and checkpoint in d (a stage whose parameters changed)."""
+    for f in PROBE_OUTPUTS:
+        p = os.path.join(d, f)
+        if os.path.exists(p):
+            os.remove(p)
+
+
+def read_summary(d):
+    """d/probe_summary.json, or StageError."""
+    s = read_json(os.path.join(d, "probe_summary.json"))
+    if s is None:
+        raise StageError(f"{d}/probe_summary.json does not read")
+    return s
+
+
+def alpha_text(s):
+    """alpha of a probe summary as a table field: empty where the fit failed."""
+    return "" if "fit_error" in s or s.get("alpha") is None else repr(float(s["alpha"]))
+
+
 def probe_stage(R, name, d, g, sample, dep):
     """`unjam probe --all`, or `--sample K` (seeded, K per packing) when sample > 0."""
     select = ["--sample", str(sample)] if sample else ["--all"]
@@ -91,10 +112,7 @@ def probe_stage(R, name, d, g, sample, dep):
 
     def run(st):
         if not st.resume:     # other parameters: no stale checkpoint or outputs
-            for f in PROBE_OUTPUTS:
-                p = os.path.join(d, f)
-                if os.path.exists(p):
-                    os.remove(p)
+            remove_probe_outputs(d)
         R.call(st, R.unjam_cmd("probe", d, *args, "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
@@ -117,10 +135,7 @@ def exact_probe_stage(R, name, d, g, sample, dep):
     def run(st):
         for m in ("lp", "cd"):
             if not st.resume:
-                for f in PROBE_OUTPUTS:
-                    p = os.path.join(outs[m], f)
-                    if os.path.exists(p):
-                        os.remove(p)
+                remove_probe_outputs(outs[m])
             if not probe_done(outs[m]):
                 R.call(st, R.unjam_cmd("probe", d, *args[m], "--out", outs[m], "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
@@ -130,17 +145,13 @@ def exact_probe_stage(R, name, d, g, sample, dep):
 
 def exact_row(d, mu, n, seed):
     """One row of EXACT_COLUMNS from d/exact-{cd,lp}/probe_summary.json."""
-    s = {m: read_json(os.path.join(o, "probe_summary.json")) for m, o in exact_probe_dirs(d).items()}
-    for m, v in s.items():
-        if v is None:
-            raise StageError(f"{exact_probe_dirs(d)[m]}/probe_summary.json does not read")
-    alpha = lambda v: "" if "fit_error" in v or v.get("alpha") is None else repr(float(v["alpha"]))  # noqa: E731
+    s = {m: read_summary(o) for m, o in exact_probe_dirs(d).items()}
     busy = sum(r.get("busy_seconds", 0.0) for r in s["cd"].get("ranks", []))
     return {"mu": fmt_mu(mu), "N": n, "seed": seed, "probes": s["cd"]["probes"],
             "not_exact": s["cd"]["not_converged"],
             "F_crit_over_F_cont_lp": repr(float(s["lp"]["F_crit_over_F_cont"])),
             "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
-            "alpha_lp": alpha(s["lp"]), "alpha_cd": alpha(s["cd"]),
+            "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),
             "cpu_s_per_probe_cd": repr(busy / max(1, s["cd"]["probes"]))}
 
 
@@ -161,10 +172,8 @@ def plot_stage(R, name, outputs, cmds, deps):
 
 
 def summary_row(d, mu, n, seed):
-    s = read_json(os.path.join(d, "probe_summary.json"))
-    if s is None:
-        raise StageError(f"{d}/probe_summary.json does not read")
-    alpha = "" if "fit_error" in s or s.get("alpha") is None else repr(float(s["alpha"]))
+    s = read_summary(d)
+    alpha = alpha_text(s)
     aerr = "" if alpha == "" or s.get("alpha_err") is None else repr(float(s["alpha_err"]))
     return {"mu": fmt_mu(mu), "N": n, "seed": seed, "phi": repr(float(s["phi"])),
             "z": repr(float(s["z"])), "F_cont_over_F0": repr(float(s["F_cont_over_F0"])),

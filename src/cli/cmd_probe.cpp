@@ -58,8 +58,8 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
   s.method = method_from_name(o.method);
-  s.cd_start = cd_start_from_name(o.cd_start);
-  if (s.cd_start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
+  s.cd.start = cd_start_from_name(o.cd_start);
+  if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
     throw Error("--cd-start applies to --method cd only");
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
@@ -100,7 +100,7 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
 ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s, int contact,
                                     const fs::path& out) {
   const CdStepSolution sol = s.method == ProbeMethod::kLemke ? probe_cd_lemke(p, contact, s.nlgs)
-                                                             : probe_cd_path(p, contact, s.nlgs, cd_path_settings(s));
+                                                             : probe_cd_path(p, contact, s.nlgs, s.cd);
   if (sol.f.size() > 0)
     write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
                       step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
@@ -135,7 +135,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   write_single(out, p, r);
   const double F0 = p.force_unit();
   std::printf("contact %d (grains %d-%d), method %s%s\n", r.contact, r.a, r.b, o.method.c_str(),
-              s.cd_start == CdPathStart::lp_optimum ? ", path from the lp optimum" : "");
+              s.cd.start == CdPathStart::lp_optimum ? ", path from the lp optimum" : "");
   std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
               r.f_crit / F0, r.f_crit / r.f_cont);
   std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",

@@ -147,11 +147,11 @@ class StepPath {
       const double m = margin * pb_.g * (1.0 + static_cast<double>(k) / nc_);
       const double gap = pb_.g_eff[k], un = u[2 * k] * dt2_, ut = u[2 * k + 1] * dt2_;
       const State s = state_[k];
-      gap0_[k] = closed(s) ? -un : un + gap >= m ? gap : gap + (m - un - gap);
-      tgap0_[k] = 0.0;
-      if (s == State::kStick) tgap0_[k] = -ut;
       const double sgn = slip_sign(s);
-      if (sgn != 0.0 && sgn * ut < m) tgap0_[k] = sgn * m - ut;
+      gap0_[k] = closed(s) ? -un : std::max(gap, m - un);
+      tgap0_[k] = 0.0;                                               // open
+      if (s == State::kStick) tgap0_[k] = -ut;                       // no slip
+      else if (sgn != 0.0 && sgn * ut < m) tgap0_[k] = sgn * m - ut;  // slip s m
       gap1_[k] = gap - gap0_[k];
       tgap1_[k] = -tgap0_[k];
     }
@@ -651,16 +651,15 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, co
   ks.touch_gap = settings.touch_gap;
   ks.M_lambda = settings.bath.M_lambda;
   KinematicProbe probe(packing, ks);
-  const int contact = pb.system.contacts[pb.probed];
-  const ProbeResult r = probe.probe(contact);
+  // The step's system holds every contact of the packing in order (build_cd_step), so a
+  // packing contact's index is its position there.
+  const ProbeResult r = probe.probe(pb.probed);
   const ForceNetwork net = probe.network();
   const EquilibriumSystem& sys = probe.system();
-  std::vector<int> position(packing.contacts.size(), -1);
-  for (int k = 0; k < pb.num_contacts(); ++k) position[pb.system.contacts[k]] = k;
   CdStepGuess guess;
   guess.f = Eigen::VectorXd::Zero(2 * pb.num_contacts());
   for (int k = 0; k < sys.num_contacts(); ++k) {
-    const int kc = position[sys.contacts[k]];
+    const int kc = sys.contacts[k];
     guess.f[2 * kc] = net.fn[k];
     guess.f[2 * kc + 1] = sys.mu > 0.0 ? net.ft[k] : 0.0;
   }

@@ -32,7 +32,7 @@ struct Worker {
   ProbeResult probe(const Packing& p, const CampaignSettings& s, int contact) {
     if (s.method == ProbeMethod::kNlgs) return probe_nlgs(p, contact, s.nlgs);
     if (s.method == ProbeMethod::kLemke) return probe_cd_lemke(p, contact, s.nlgs).result;
-    if (s.method == ProbeMethod::kCd) return probe_cd_path(p, contact, s.nlgs, cd_path_settings(s)).result;
+    if (s.method == ProbeMethod::kCd) return probe_cd_path(p, contact, s.nlgs, s.cd).result;
     if (!kinematic) kinematic = std::make_unique<KinematicProbe>(p, s.kinematic);
     return kinematic->probe(contact);
   }
@@ -132,12 +132,6 @@ CdPathStart cd_start_from_name(const std::string& name) {
   for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum})
     if (name == cd_start_name(s)) return s;
   throw Error("--cd-start must be static or lp (got '" + name + "')");
-}
-
-CdPathSettings cd_path_settings(const CampaignSettings& s) {
-  CdPathSettings ps;
-  ps.start = s.cd_start;
-  return ps;
 }
 
 CampaignSettings campaign_settings_for(const Packing& p) {
@@ -293,8 +287,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
     j["dt"] = s.nlgs.dt;
     j["M_lambda"] = s.nlgs.bath.M_lambda;
     // recorded where it is not the default, so that earlier checkpoints still resume
-    if (s.method == ProbeMethod::kCd && s.cd_start != CdPathStart::static_network)
-      j["cd_start"] = cd_start_name(s.cd_start);
+    if (s.method == ProbeMethod::kCd && s.cd.start != CdPathStart::static_network)
+      j["cd_start"] = cd_start_name(s.cd.start);
     if (s.method == ProbeMethod::kNlgs) {
       j["velocity_tol"] = s.nlgs.velocity_tol;
       j["max_sweeps"] = s.nlgs.max_sweeps;

@@ -42,15 +42,12 @@ struct CampaignSettings {
   ProbeMethod method = ProbeMethod::kLp;
   ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS and Lemke probes
   KinematicProbeSettings kinematic;     // g, LP and state tolerances of the fast probe
-  CdPathStart cd_start = CdPathStart::static_network;  // where the cd method's path starts
+  CdPathSettings cd;                    // the cd method's path (where it starts, compliance)
   bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
   double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
   int sample = 0;                       // > 0: a random subset of this many contacts
   std::uint64_t seed = 1;               // of the subset
 };
-
-// The cd method's path settings of a campaign (probe/cd_path.hpp).
-CdPathSettings cd_path_settings(const CampaignSettings& settings);
 
 // One probed contact (forces in simulation units, as contacts.csv).
 struct ProbeRow {
