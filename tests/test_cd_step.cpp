@@ -165,6 +165,34 @@ TEST(CdPath, FromTheLpOptimumFindsTheStepsOtherSolution) {
   }
 }
 
+TEST(CdPath, CompliantContinuationReachesTheRigidStepFromTheStaticState) {
+  // p50-mu1, CdPathStart::compliant: the path from the static network at compliance 0.1
+  // (soft contacts), then the compliance halved per proximal step. Every reference contact
+  // ends exact in the rigid step's own residual, on the solution from the static state
+  // (contacts 5 and 6: 2.2677 and 2.2687, not 2.2454 and 2.2438), having lowered the
+  // compliance at least once. Started at the rigid compliance instead, the continuation is
+  // the plain path (no lowering).
+  const Packing& p = fixture("p50-mu1");
+  CdPathSettings soft;
+  soft.start = CdPathStart::compliant;
+  for (const auto& [k, f_ref] : cd_reference()) {
+    CdPathStats stats;
+    const CdStepSolution s = probe_cd_path(p, k, ProbeSettings{}, soft, &stats);
+    ASSERT_TRUE(s.result.converged) << "contact " << k;
+    EXPECT_TRUE(stats.failure.empty()) << "contact " << k;
+    EXPECT_LT(s.residual.max(), kExactStepTolerance) << "contact " << k;
+    EXPECT_NEAR(s.result.f_crit / f_ref, 1.0, 1e-6) << "contact " << k;
+    EXPECT_NEAR(contact_opening(p, s.result, k) / s.result.g, 1.0, 1e-6) << "contact " << k;
+    EXPECT_GT(stats.lowerings, 0) << "contact " << k;
+  }
+  CdPathSettings rigid = soft;
+  rigid.compliant_start = rigid.compliance;
+  CdPathStats stats;
+  const CdStepSolution s = probe_cd_path(p, 5, ProbeSettings{}, rigid, &stats);
+  EXPECT_EQ(stats.lowerings, 0);
+  EXPECT_NEAR(s.result.f_crit / cd_reference().at(5), 1.0, 1e-6);
+}
+
 TEST(CdPath, AgreesWithLemkeWhereTheStepHasOneSolution) {
   // p50-mu0.1 contacts 0..5: Lemke's method (dense, an independent pivoting order) and the
   // path find the same F_crit, and both solutions pass the step's residual check.

@@ -135,7 +135,9 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   write_single(out, p, r);
   const double F0 = p.force_unit();
   std::printf("contact %d (grains %d-%d), method %s%s\n", r.contact, r.a, r.b, o.method.c_str(),
-              s.cd.start == CdPathStart::lp_optimum ? ", path from the lp optimum" : "");
+              s.cd.start == CdPathStart::lp_optimum  ? ", path from the lp optimum"
+              : s.cd.start == CdPathStart::compliant ? ", compliant continuation"
+                                                      : "");
   std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
               r.f_crit / F0, r.f_crit / r.f_cont);
   std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
@@ -355,7 +357,9 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--cd-start", o->cd_start,
                   "cd: where the path starts: static (the static network; the solution the step's "
                   "dynamics from rest reach) or lp (the lp probe's optimum; finds another solution "
-                  "where the step has several, on small packings: it fails at 500 disks; docs/probe.md, \"Where the path starts\")")
+                  "where the step has several, on small packings: it fails at 500 disks) or compliant (the static network "
+                  "at a soft compliance, lowered to the rigid step: the rigid limit of stiff contacts; fast, but at 500 "
+                  "disks another solution than static's; docs/probe.md, \"Where the path starts\")")
       ->capture_default_str();
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");

@@ -173,6 +173,32 @@ class StepPath {
     fref1_ = f - fref0_;
   }
 
+  // At lambda = 1: the compliance becomes kappa_new, with the reference forces shifted so
+  // that forces f (a solution at lambda = 1) stay one, kappa_new (f - fref_new) =
+  // kappa (f - fref): fref_new = f - (kappa / kappa_new) (f - fref). S changes on every
+  // closed row, so factorize() must follow.
+  void set_compliance(double kappa_new, const Eigen::VectorXd& f) {
+    proximal_step(f);  // the data held at lambda = 1, fref1 = f - fref0
+    fref0_ = f - (kappa_ / kappa_new) * fref1_;
+    fref1_.setZero();
+    kappa_ = kappa_new;
+  }
+  double compliance() const { return kappa_; }
+  // The path's data at lambda = 1 (held there by proximal_step) with the states of a
+  // solution, to go back to after a proximal path that fails.
+  struct Held {
+    double kappa;
+    Eigen::VectorXd fref;
+    std::vector<State> states;
+  };
+  Held held() const { return {kappa_, fref0_ + fref1_, state_}; }
+  void restore(const Held& h) {
+    kappa_ = h.kappa;
+    fref0_ = h.fref;
+    fref1_.setZero();
+    state_ = h.states;
+  }
+
   // Assembles and factorises the reduced system S of the current states. Its pattern does
   // not depend on the states (inactive entries are stored as zeros), so it is analysed once.
   bool factorize() {
@@ -574,10 +600,11 @@ void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess
   path.start_at(states, f, guess.q / dt2, margin);
 }
 
-// The step at compliance `compliance` (CdPathSettings::compliance), followed from the static
-// network or from `guess`; f empty where it fails.
+// The step followed at compliance `compliance` from the static network or from `guess`, then
+// brought to the rigid step at compliance `rigid` (both as fractions of g / (dt^2 F0), see
+// CdPathSettings); f empty where the first path fails.
 CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
-                      const CdStepGuess* guess, double compliance, CdPathStats& stats) {
+                      const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   // The static network, its tangential forces drawn into the cone's interior by distinct
@@ -614,12 +641,31 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
 
   // lambda = 1. The compliance's own displacements (kappa dt^2 |f - f0|, ~ compliance g)
   // are removed by proximal steps: the reference forces move to the solution, along a path
-  // of their own (StepPath::proximal_step), while that lowers the step's residual.
+  // of their own (StepPath::proximal_step), while that lowers the step's residual. A path
+  // followed at a compliance above `rigid` (CdPathStart::compliant) first lowers it by
+  // ps.compliance_factor per proximal step down to `rigid`, from the latest solution on
+  // (StepPath::set_compliance); the lowest residual met is kept.
   sol.f = path.forces(x0 + x1);
   sol.residual = cd_step_residual(pb, sol.f);
   std::vector<State> states = path.states();  // those of sol.f
-  for (int r = 0; r < ps.refinements && sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
-    path.proximal_step(sol.f);
+  Eigen::VectorXd f_latest = sol.f;
+  const double kappa_rigid = rigid * pb.g / (dt2 * F0);
+  // A lowering whose proximal path fails (a cycle at a degenerate point) is taken again
+  // from the latest solution with the factor's square root (a smaller step), up to
+  // kMaxLoweringRetries times in a row.
+  constexpr int kMaxLoweringRetries = 4;
+  double factor = ps.compliance_factor;
+  int failed = 0;
+  StepPath::Held held = path.held();
+  for (int r = 0; sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
+    const bool lowering = path.compliance() > kappa_rigid * (1.0 + 1e-12);
+    if (!lowering && r >= stats.lowerings + failed + ps.refinements) break;
+    if (lowering) {
+      path.set_compliance(std::max(kappa_rigid, factor * path.compliance()), f_latest);
+      ++stats.lowerings;
+    }
+    path.proximal_step(f_latest);
+    if (lowering && !path.factorize()) break;
     path.solve(x0, x1);
     path.displacements(x0, x1);
     ++stats.refinements;
@@ -627,11 +673,26 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     const bool reached = follow_path(path, pb, ps, x0, x1, proximal);
     stats.pieces += proximal.pieces;
     stats.degenerate += proximal.degenerate;
-    if (!reached) break;
-    const Eigen::VectorXd f = path.forces(x0 + x1);
-    const CdStepResidual res = cd_step_residual(pb, f);
-    if (!(res.max() < sol.residual.max())) break;
-    sol.f = f;
+    if (!reached) {
+      if (!lowering) break;
+      if (++failed > kMaxLoweringRetries) {
+        stats.failure = proximal.failure;
+        break;
+      }
+      path.restore(held);
+      factor = std::sqrt(factor);
+      continue;
+    }
+    f_latest = path.forces(x0 + x1);
+    held = path.held();
+    failed = 0;
+    factor = ps.compliance_factor;
+    const CdStepResidual res = cd_step_residual(pb, f_latest);
+    if (!(res.max() < sol.residual.max())) {
+      if (lowering) continue;
+      break;
+    }
+    sol.f = f_latest;
     sol.residual = res;
     states = path.states();
   }
@@ -685,13 +746,26 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   }
   // The compliance trades the conditioning of the sticking set's system against its own
   // displacements; where the path at ps.compliance is not exact, it is followed again at ten
-  // times it, then a tenth of it, and the solution with the lowest residual is kept.
+  // times it, then a tenth of it, and the solution with the lowest residual is kept. The
+  // compliant continuation is retried instead with its lowering factor squared (larger
+  // steps), then square-rooted (smaller ones): its failures are cycles at degenerate points
+  // met on the way down, and another schedule passes other points.
+  const bool soft = ps.start == CdPathStart::compliant && ps.compliant_start > ps.compliance;
   CdStepSolution best;
   CdPathStats best_stats;
-  for (const double factor : {1.0, 10.0, 0.1}) {
-    if (factor != 1.0 && !ps.retry) break;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    if (attempt > 0 && !ps.retry) break;
     CdPathStats stats;
-    CdStepSolution sol = follow(pb, packing, ps, guess, factor * ps.compliance, stats);
+    CdPathSettings at = ps;
+    if (soft) {
+      at.compliance_factor = attempt == 0 ? ps.compliance_factor
+                             : attempt == 1 ? ps.compliance_factor * ps.compliance_factor
+                                            : std::sqrt(ps.compliance_factor);
+    } else {
+      at.compliance = ps.compliance * (attempt == 0 ? 1.0 : attempt == 1 ? 10.0 : 0.1);
+    }
+    CdStepSolution sol = follow(pb, packing, at, guess, soft ? ps.compliant_start : at.compliance,
+                                at.compliance, stats);
     stats.attempts = best_stats.attempts + 1;
     const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
     if (better || best_stats.attempts == 0) {

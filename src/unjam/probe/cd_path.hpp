@@ -21,7 +21,11 @@
 // kappa a fraction `compliance` of g / (dt^2 F0)), and at lambda = 1 proximal steps move
 // f_ref to the solution, which removes the compliance's displacement (the rigid step). Where
 // that is not exact, the path is followed again at ten times and a tenth of the compliance
-// (`retry`), and the lowest residual kept.
+// (`retry`), and the lowest residual kept. The compliant continuation (CdPathStart::compliant)
+// follows the path at a soft compliance instead, where the step has few folds, and lowers the
+// compliance by a factor per proximal step down to the rigid one (docs/probe.md, "Where the
+// path starts"): the rigid limit of the step with stiff contacts, which may be another of the
+// step's solutions than the branch from the static network.
 //
 // Each piece solves the system with the grains' rows eliminated (M is diagonal): a sparse
 // matrix of size 2 N_c + 1 (the Delassus operator W = A^T M^-1 A on the kinematic rows,
@@ -40,7 +44,9 @@ namespace unjam {
 // solution connected to it, which the step's dynamics from rest reach), or the LP optimum's
 // network and kinematic field (probe/kinematic_probe), itself an exact solution of the
 // quasi-static step, from which the path reaches the solution of the step nearest to it.
-enum class CdPathStart { static_network, lp_optimum };
+// Or the static network at a soft compliance (compliant_start), then the compliance lowered
+// step by step to the rigid step's: the rigid limit of the step with stiff contacts.
+enum class CdPathStart { static_network, lp_optimum, compliant };
 
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
@@ -50,12 +56,17 @@ struct CdPathSettings {
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
   int max_updated_rows = 48;  // rows of S changed before it is factorised afresh (0: every piece)
   bool retry = true;          // where not exact: again at 10 x and 0.1 x the compliance
+  // CdPathStart::compliant: the path's compliance, then its factor per proximal step down
+  // to `compliance`.
+  double compliant_start = 0.1;
+  double compliance_factor = 0.5;
 };
 
 struct CdPathStats {
   int pieces = 0;             // linear pieces of the path (state changes)
   int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
   int refinements = 0;
+  int lowerings = 0;          // of them, with the compliance lowered (CdPathStart::compliant)
   int factorizations = 0;     // of the reduced system (the others are updates of its factors)
   int attempts = 0;           // paths followed (1 + retries)
   int open = 0, sliding = 0;  // final states (the probed contact not counted as open)

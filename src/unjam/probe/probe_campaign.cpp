@@ -125,13 +125,13 @@ ProbeMethod method_from_name(const std::string& name) {
 }
 
 const char* cd_start_name(CdPathStart start) {
-  return start == CdPathStart::lp_optimum ? "lp" : "static";
+  return start == CdPathStart::lp_optimum ? "lp" : start == CdPathStart::compliant ? "compliant" : "static";
 }
 
 CdPathStart cd_start_from_name(const std::string& name) {
-  for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum})
+  for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum, CdPathStart::compliant})
     if (name == cd_start_name(s)) return s;
-  throw Error("--cd-start must be static or lp (got '" + name + "')");
+  throw Error("--cd-start must be static, lp or compliant (got '" + name + "')");
 }
 
 CampaignSettings campaign_settings_for(const Packing& p) {
