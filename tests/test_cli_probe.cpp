@@ -120,5 +120,35 @@ TEST_F(CliProbe, SampleProbesSeededForceCarryingContactsAndSummarisesThem) {
   EXPECT_NE(seen2, seen);
 }
 
+TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutionsHere) {
+  // --method cd --cd-start compliant on a seeded sample of p50-mu0.1: every probe exact, and
+  // on this packing the same F_crit as the path from the static network within 1e-3
+  // (docs/probe.md, "Where the path starts": one contact of the 82 differs by 2e-4). The
+  // start is recorded in the summary's settings (and absent for the default start), so a
+  // checkpoint of one start does not resume the other.
+  const std::string args = " --sample 6 --method cd --quiet --threads 1 --out ";
+  const fs::path soft = root_ / "compliant", rigid = root_ / "static";
+  for (const fs::path& d : {soft, rigid}) fs::create_directories(d);
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(soft) + " --cd-start compliant");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(rigid));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable a = CsvTable::read(soft / "probes.csv"), b = CsvTable::read(rigid / "probes.csv");
+  ASSERT_EQ(a.rows(), 6u);
+  ASSERT_EQ(b.rows(), 6u);
+  for (std::size_t i = 0; i < a.rows(); ++i) {
+    EXPECT_EQ(a.integer(i, a.column("contact")), b.integer(i, b.column("contact")));
+    EXPECT_EQ(a.integer(i, a.column("converged")), 1) << "row " << i;
+    EXPECT_LE(a.number(i, a.column("residual")), 1e-6) << "row " << i;
+    const double f_soft = a.number(i, a.column("f_crit")), f_rigid = b.number(i, b.column("f_crit"));
+    EXPECT_NEAR(f_soft / f_rigid, 1.0, 1e-3) << "row " << i;
+  }
+  const nlohmann::json js = read_json_file(soft / "probe_summary.json");
+  const nlohmann::json jr = read_json_file(rigid / "probe_summary.json");
+  EXPECT_EQ(js["settings"]["cd_start"], "compliant");
+  EXPECT_FALSE(jr["settings"].contains("cd_start"));
+  EXPECT_EQ(js["not_converged"].get<int>(), 0);
+}
+
 }  // namespace
 }  // namespace unjam
