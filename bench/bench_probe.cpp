@@ -6,8 +6,10 @@
 //                         (one thread): s per probe; F_crit >= F_cont (the LP maximum is at
 //                         least the packing's own force), the field opens the pair by g with
 //                         no unilateral violation. Counter model_s: building the LP model.
-//   BM_CdPath/N           probe_cd_path (the exact CD step, --method cd) on the same contacts,
-//                         one thread: s per probe; counters exact (residual <= 1e-6 g),
+//   BM_CdPath/N/start     probe_cd_path (the exact CD step, --method cd) on the same contacts,
+//                         one thread, CPU time, from the static network (start 0) or by the
+//                         compliant continuation (start 1, --cd-start compliant): s per
+//                         probe; counters exact (residual <= 1e-6 g),
 //                         no_solution, pieces and factorizations per probe; every solution
 //                         returned must pass kMaxPathResidual and open the pair by g to
 //                         within its residual (at least 1e-6).
@@ -87,12 +89,14 @@ void BM_CdPath(benchmark::State& state) {
   const Packing& p = bench::static_scene(N, kMu);
   const std::vector<int> contacts = probed_contacts(p);
   omp_set_num_threads(1);
+  CdPathSettings ps;
+  if (state.range(1) == 1) ps.start = CdPathStart::compliant;
   std::vector<CdStepSolution> results;
   std::vector<CdPathStats> stats(contacts.size());
   for (auto _ : state) {
     results.clear();
     for (std::size_t i = 0; i < contacts.size(); ++i)
-      results.push_back(probe_cd_path(p, contacts[i], ProbeSettings{}, CdPathSettings{}, &stats[i]));
+      results.push_back(probe_cd_path(p, contacts[i], ProbeSettings{}, ps, &stats[i]));
   }
   int exact = 0, none = 0, pieces = 0, factorizations = 0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
@@ -120,9 +124,8 @@ void BM_CdPath(benchmark::State& state) {
                                       benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_CdPath)
-    ->ArgName("N")->Arg(500)
+    ->ArgNames({"N", "start"})->Args({500, 0})->Args({500, 1})
     ->Iterations(1)
-    ->UseRealTime()
     ->Unit(benchmark::kSecond);
 
 void BM_ForceLp(benchmark::State& state) {

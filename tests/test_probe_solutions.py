@@ -1,0 +1,110 @@
+"""Tests of scripts/probe_solutions.py on the fixture p50-mu1 (about 5 s).
+
+Run from the repository root:  /usr/bin/python3 -m unittest tests/test_probe_solutions.py
+The unjam binary: $UNJAM (ctest sets it to the build's own), else build/release/unjam;
+skipped when it is missing.
+"""
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+UNJAM = os.path.abspath(os.environ.get("UNJAM") or os.path.join(REPO, "build", "release", "unjam"))
+SCRIPT = os.path.join(REPO, "scripts", "probe_solutions.py")
+FIXTURES = os.path.join(REPO, "tests", "fixtures")
+
+
+def reference():
+    """{contact: (f_crit from the static state, other solution or None)} of cd-reference.csv."""
+    with open(os.path.join(FIXTURES, "p50-mu1", "cd-reference.csv")) as f:
+        rows = csv.DictReader(line for line in f if not line.startswith("#"))
+        return {int(r["contact"]): (float(r["f_crit_from_static"]),
+                                    float(r["f_crit_other_solution"]) if r["f_crit_other_solution"] else None)
+                for r in rows}
+
+
+def run(*args):
+    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
+                          cwd=REPO, timeout=300)
+
+
+@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
+                     f"{UNJAM} is missing: build it first (cmake --build build/release -j2)")
+class ProbeSolutions(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="unjam-solutions-")
+        cls.packing = os.path.join(cls.tmp, "p50-mu1")
+        shutil.copytree(os.path.join(FIXTURES, "p50-mu1"), cls.packing)
+        cls.out = os.path.join(cls.tmp, "solutions")
+        cls.args = [cls.packing, "--all", "--starts", "static", "compliant", "lp", "--threads", "1",
+                    "--unjam", UNJAM, "--out", cls.out]
+        p = run(*cls.args)
+        if p.returncode != 0:
+            raise AssertionError(f"probe_solutions.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
+        with open(os.path.join(cls.out, "solutions.csv"), newline="") as f:
+            cls.rows = {int(r["contact"]): r for r in csv.DictReader(f)}
+        with open(os.path.join(cls.out, "solutions.json")) as f:
+            cls.summary = json.load(f)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_1_the_reference_contacts(self):
+        # Contacts 5 and 6 have two exact solutions (the independent solver's two): the lp
+        # start finds the other one; contacts 1 and 2 have one, which every start finds.
+        for k, (f_static, f_other) in reference().items():
+            r = self.rows[k]
+            self.assertEqual(int(r["exact_starts"]), 3, k)
+            self.assertAlmostEqual(float(r["f_crit_static"]) / f_static, 1.0, delta=1e-6)
+            if f_other is None:
+                self.assertEqual(int(r["solutions"]), 1, k)
+            else:
+                self.assertEqual(int(r["solutions"]), 2, k)
+                self.assertAlmostEqual(float(r["f_crit_min"]) / f_other, 1.0, delta=1e-6)
+                self.assertAlmostEqual(float(r["f_crit_max"]) / f_static, 1.0, delta=1e-6)
+
+    def test_2_counts_agree_with_the_rows(self):
+        rows = self.rows.values()
+        s = self.summary
+        self.assertEqual(s["probes"], len(self.rows))
+        self.assertEqual(s["probes"], 56)  # the force-carrying contacts of p50-mu1
+        for start in ("static", "compliant", "lp"):
+            self.assertEqual(s["exact"][start],
+                             sum(float(r[f"residual_{start}"]) <= 1e-6 for r in rows), start)
+        several = sum(int(r["solutions"]) >= 2 for r in rows)
+        self.assertEqual(s["with_two_solutions_or_more"], several)
+        self.assertGreaterEqual(several, 2)
+        for r in rows:
+            self.assertLessEqual(int(r["solutions"]), int(r["exact_starts"]))
+            if r["f_crit_min"]:
+                self.assertLessEqual(float(r["f_crit_min"]), float(r["f_crit_max"]))
+
+    def test_3_rerun_gives_the_same_bytes(self):
+        # The probe runs are complete: unjam resumes them without probing again.
+        with open(os.path.join(self.out, "solutions.csv"), "rb") as f:
+            before = f.read()
+        p = run(*self.args)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(os.path.join(self.out, "solutions.csv"), "rb") as f:
+            self.assertEqual(f.read(), before)
+
+    def test_4_bad_input_is_refused(self):
+        for args, message in (([self.tmp, "--all"], "not a packing directory"),
+                              ([self.packing, "--sample", "0", "--unjam", UNJAM], "--sample must be at least 1"),
+                              ([self.packing, "--all", "--starts", "static", "static", "--unjam", UNJAM],
+                               "lists a start twice")):
+            p = run(*args)
+            self.assertEqual(p.returncode, 2, args)
+            self.assertIn(message, p.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
