@@ -17,7 +17,8 @@ std::vector<int> select_contacts(const Packing& packing, double gap_tol, double 
   std::vector<int> selected;
   for (std::size_t k = 0; k < packing.contacts.size(); ++k) {
     const Contact& c = packing.contacts[k];
-    if (c.fn > fn_tol * F0 || c.gap <= gap_tol) selected.push_back(static_cast<int>(k));
+    const ContactClass state = classify_contact(c, gap_tol, fn_tol * F0);
+    if (state.touching || state.loaded) selected.push_back(static_cast<int>(k));
   }
   return selected;
 }
