@@ -70,7 +70,7 @@ TEST(StepResidual, NlgsAndTheExactPathSolveTheSameProbeStep) {
     for (int k = 0; k < step.num_contacts() && loaded < 0; ++k)
       if (k != contact && bad[2 * k] > 0.1 * F0) loaded = k;
     ASSERT_GE(loaded, 0);
-    bad[2 * loaded + 1] = p.meta.mu * bad[2 * loaded] + 0.1 * F0;  // 0.1 F0 outside the cone
+    bad[2 * loaded + 1] = p.meta.contact.mu * bad[2 * loaded] + 0.1 * F0;  // 0.1 F0 outside the cone
     EXPECT_GT(step_residual(step, bad, set.g).coulomb, 0.05);
   }
 }

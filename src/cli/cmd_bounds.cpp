@@ -102,7 +102,7 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
       {"packing", opt.dir},
       {"N", packing.size()},
       {"mu", sys.mu},
-      {"P_ext", packing.meta.P_ext},
+      {"P_ext", packing.meta.contact.P_ext},
       {"F0", sys.F0},
       {"contacts_listed", packing.contacts.size()},
       {"contacts_used", Nc},

@@ -30,7 +30,10 @@ Eigen::VectorXd ContactProblem::relative_displacement(const Eigen::VectorXd& f) 
 }
 
 ContactModel packing_contact_model(const Packing& packing, double M_lambda, double touch_gap) {
-  return {packing.meta.mu, packing.meta.P_ext, M_lambda, touch_gap};
+  ContactModel model = packing.meta.contact;
+  model.M_lambda = M_lambda;
+  model.touch_gap = touch_gap;
+  return model;
 }
 
 ContactProblem build_contact_problem(const Packing& packing, const ContactModel& model, double dt) {

@@ -28,7 +28,7 @@ EquilibriumSystem build_equilibrium_system(const Packing& packing,
   const int N = static_cast<int>(packing.size());
   EquilibriumSystem sys;
   sys.contacts = contacts;
-  sys.mu = packing.meta.mu;
+  sys.mu = packing.meta.contact.mu;
   sys.F0 = packing.force_unit();
 
   // Row blocks: grains in increasing index order.
@@ -77,7 +77,7 @@ EquilibriumSystem build_equilibrium_system(const Packing& packing,
   sys.A.setFromTriplets(triplets.begin(), triplets.end());
   sys.A.makeCompressed();
   sys.rhs = Eigen::VectorXd::Zero(rows);
-  sys.rhs[rows - 1] = 2.0 * packing.cell.area() * packing.meta.P_ext;
+  sys.rhs[rows - 1] = 2.0 * packing.cell.area() * packing.meta.contact.P_ext;
   return sys;
 }
 

@@ -27,7 +27,7 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
   solve.max_sweeps = options.max_sweeps;
   solve.touch_gap = touch_gap_covering(work.contacts, solve.touch_gap);
   Bath bath;
-  bath.P_ext = packing.meta.P_ext;
+  bath.P_ext = packing.meta.contact.P_ext;
   NlgsThreading threading;  // measurements of Threading::kAuto, shared by the walk's solves
 
   RandomWalkResult result;

@@ -27,7 +27,7 @@ std::pair<double, double> residuals(const EquilibriumSystem& sys, const Eigen::V
 }  // namespace
 
 PolishResult polish_forces(Packing& packing, double tol, double touch_gap) {
-  const double mu = packing.meta.mu;
+  const double mu = packing.meta.contact.mu;
   std::vector<int> loaded;
   for (int k = 0; k < static_cast<int>(packing.contacts.size()); ++k) {
     const ContactClass state = classify_contact(packing.contacts[k], touch_gap, 0.0);
