@@ -95,7 +95,7 @@ struct KernelInput {
 };
 
 KernelInput kernel_input(const Packing& p, int sweeps) {
-  KernelInput in{StepProblem{p.cell, 0.01, p.meta.mu, Bath{}, 0.0, {}}, p.contacts, p.particles, {}};
+  KernelInput in{StepProblem{p.cell, 0.01, p.meta.contact.mu, Bath{}, 0.0, {}}, p.contacts, p.particles, {}};
   for (Contact& c : in.contacts) c.fn = c.ft = 0.0;
   in.pb.g_eff.resize(in.contacts.size());
   for (std::size_t k = 0; k < in.contacts.size(); ++k)

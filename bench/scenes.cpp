@@ -38,7 +38,7 @@ Packing gas(int N, std::uint64_t seed) {
 std::string verify_static(const Packing& p, int N, double mu, std::uint64_t seed,
                           PackingStats* out) {
   if (static_cast<int>(p.size()) != N) return "N = " + std::to_string(p.size());
-  if (p.meta.mu != mu) return "mu = " + std::to_string(p.meta.mu);
+  if (p.meta.contact.mu != mu) return "mu = " + std::to_string(p.meta.contact.mu);
   if (p.meta.seed != seed) return "seed = " + std::to_string(p.meta.seed);
   if (!p.state.is_static) return "not marked static";
   const PackingStats s = compute_packing_stats(p);
@@ -70,7 +70,7 @@ Packing static_packing(int N, double mu, std::uint64_t seed) {
   g.N = N;
   g.seed = seed;
   Packing p = make_gas(g);
-  p.meta.mu = mu;
+  p.meta.contact.mu = mu;
   CompactionSettings cs;
   p.meta.settings = to_json(cs, g);
   p.meta.command = "unjam_bench scene " + static_packing_name(N, mu, seed);
@@ -88,7 +88,7 @@ Packing static_packing(int N, double mu, std::uint64_t seed) {
 
 Packing compressing(int N, std::uint64_t seed, double phi_target) {
   Packing p = gas(N, seed);
-  p.meta.mu = 0.1;
+  p.meta.contact.mu = 0.1;
   const CompactionSettings cs;  // the dynamics of the compaction
   NlgsThreading threading;
   while (p.packing_fraction() < phi_target) {

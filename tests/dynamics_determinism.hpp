@@ -35,7 +35,7 @@ inline Packing dense_state() {
     p.particles.x[i] *= s;
     p.particles.y[i] *= s;
   }
-  p.meta.mu = 0.3;
+  p.meta.contact.mu = 0.3;
   randomize_velocities(p.particles, 0.5, 0.5, 6);
   return p;
 }

@@ -32,7 +32,7 @@ inline Packing two_disks(double L, Vec2 ra, double Ra, Vec2 va, double wa, Vec2 
   P.vx = {va.x(), vb.x()};
   P.vy = {va.y(), vb.y()};
   P.omega = {wa, wb};
-  p.meta.mu = mu;
+  p.meta.contact.mu = mu;
   return p;
 }
 
@@ -136,7 +136,7 @@ inline const Compacted& compacted(int N, double mu, std::uint64_t seed) {
     gs.phi = 0.3;
     gs.seed = seed;
     c.gas = make_gas(gs);
-    c.gas.meta.mu = mu;
+    c.gas.meta.contact.mu = mu;
     c.packing = c.gas;
     CompactionSettings cs;
     c.result = compact(c.packing, cs);

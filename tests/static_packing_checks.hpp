@@ -36,9 +36,9 @@ inline Measured check_static(const Compacted& c, double mu, const std::string& l
   Measured m;
   EXPECT_TRUE(c.result.is_static) << label;
   EXPECT_TRUE(p.state.is_static) << label;
-  EXPECT_EQ(p.meta.mu, mu);
+  EXPECT_EQ(p.meta.contact.mu, mu);
   const double F0 = p.force_unit();
-  EXPECT_DOUBLE_EQ(F0, 2.0 * p.mean_radius() * p.meta.P_ext);
+  EXPECT_DOUBLE_EQ(F0, 2.0 * p.mean_radius() * p.meta.contact.P_ext);
   // Velocities zero.
   for (std::size_t i = 0; i < P.size(); ++i) {
     EXPECT_EQ(P.vx[i], 0.0) << label;
@@ -64,7 +64,7 @@ inline Measured check_static(const Compacted& c, double mu, const std::string& l
   // Pressure: P_in = sum fn |l| / (2V) (no kinetic part).
   double S = 0.0;
   for (const Contact& k : p.contacts) S += k.fn * k.l.norm();
-  m.P_ratio = S / (2.0 * p.cell.area()) / p.meta.P_ext;
+  m.P_ratio = S / (2.0 * p.cell.area()) / p.meta.contact.P_ext;
   EXPECT_NEAR(m.P_ratio, 1.0, 1e-8) << label;
   // Overlaps, and no overlapping pair missing from the contact list (brute force).
   std::set<std::pair<int, int>> listed;

@@ -90,8 +90,8 @@ TEST(Bath, GasCompressesToAStaticPackingAtPext) {
   for (const Contact& k : p.contacts) S += k.fn * k.l.norm();
   const double P_in = S / (2.0 * p.cell.area());  // velocities are zero
   std::printf("[ bath ] N 100 mu 0.1 seed 7: L %.6f -> %.6f, P_in / P_ext - 1 = %.3g, %.2f s\n",
-              c.gas.cell.Lx, p.cell.Lx, P_in / p.meta.P_ext - 1.0, c.seconds);
-  EXPECT_NEAR(P_in / p.meta.P_ext, 1.0, 1e-6);
+              c.gas.cell.Lx, p.cell.Lx, P_in / p.meta.contact.P_ext - 1.0, c.seconds);
+  EXPECT_NEAR(P_in / p.meta.contact.P_ext, 1.0, 1e-6);
 }
 
 // ---- bad input ----
@@ -125,7 +125,7 @@ TEST(BadInput, ValidateRejectsInvalidSettings) {
   bad([](CompactionSettings& s) { s.v_static = 0.0; });
   // compact() validates before touching the packing.
   Packing gas = dilute_gas(10, 1);
-  gas.meta.mu = -1.0;
+  gas.meta.contact.mu = -1.0;
   const Packing before = gas;
   EXPECT_THROW(compact(gas, CompactionSettings{}), Error);
   EXPECT_EQ(gas.cell.Lx, before.cell.Lx);

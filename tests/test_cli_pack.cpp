@@ -114,7 +114,7 @@ TEST(CliPack, ReRelaxAtHigherFrictionKeepsTheOriginal) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Packing p = read_packing(higher);
   EXPECT_TRUE(p.state.is_static);
-  EXPECT_DOUBLE_EQ(p.meta.mu, 0.5);
+  EXPECT_DOUBLE_EQ(p.meta.contact.mu, 0.5);
   EXPECT_EQ(read_packing(base).meta.command, before) << "the source packing is untouched";
   const PackingStats s = compute_packing_stats(p);
   EXPECT_EQ(s.max_coulomb_violation, 0.0);

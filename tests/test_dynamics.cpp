@@ -147,7 +147,7 @@ TEST(Dynamics, ManyBodyConservationDissipationAndForceConsistency) {
   gs.phi = 0.45;
   gs.seed = 11;
   Packing p = make_gas(gs);
-  p.meta.mu = 0.3;
+  p.meta.contact.mu = 0.3;
   testing::randomize_velocities(p.particles, 1.0, 1.0, 21);
   DynamicsSettings ds = fixed_cell();
   ds.nlgs.tol = 1e-13;
@@ -210,7 +210,7 @@ TEST(Dynamics, ManyBodyWithTheBathConservesPeculiarMomentum) {
   gs.phi = 0.45;
   gs.seed = 12;
   Packing p = make_gas(gs);
-  p.meta.mu = 0.5;
+  p.meta.contact.mu = 0.5;
   testing::randomize_velocities(p.particles, 0.5, 0.5, 22);
   DynamicsSettings ds;
   ds.bath.M_lambda = 1.0;  // a light cell: fast compression

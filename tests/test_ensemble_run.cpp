@@ -70,8 +70,8 @@ TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
   // `unjam probe` does (campaign_settings_for), not the library's defaults; g, dt and the
   // NLGS tolerance are the ensemble's own.
   Packing p = read_packing(std::string(UNJAM_FIXTURES_DIR) + "/p50-mu1");
-  p.meta.settings["dynamics"]["M_lambda"] = 0.5;
-  p.meta.settings["static"]["touch_gap"] = 2e-6;
+  p.meta.contact.M_lambda = 0.5;
+  p.meta.contact.touch_gap = 2e-6;
   EnsembleSettings in;
   in.probe_g = 2e-9;
   in.probe_dt = 2e-3;

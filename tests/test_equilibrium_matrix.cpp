@@ -42,7 +42,7 @@ TEST(EquilibriumMatrix, PackingNetworkSatisfiesBalanceRows) {
     const double F0 = p.force_unit();
     EXPECT_LT(r.head(r.size() - 1).cwiseAbs().maxCoeff(), 1e-9 * F0) << name;
     EXPECT_LT(std::abs(r[r.size() - 1]), 1e-9 * sys.rhs[r.size() - 1]) << name;
-    EXPECT_NEAR(sys.rhs[sys.pressure_row()], 2.0 * p.cell.area() * p.meta.P_ext, 1e-12);
+    EXPECT_NEAR(sys.rhs[sys.pressure_row()], 2.0 * p.cell.area() * p.meta.contact.P_ext, 1e-12);
   }
 }
 
@@ -69,7 +69,7 @@ TEST(EquilibriumMatrix, RankOfSubsetsMatchesDenseLu) {
       if (k % stride != 0) kept.push_back(k);
     for (const double mu : {0.1, 0.0}) {
       Packing q = p;
-      q.meta.mu = mu;
+      q.meta.contact.mu = mu;
       const auto sys = unjam::build_equilibrium_system(q, kept);
       const auto info = unjam::equilibrium_rank(sys);
       EXPECT_EQ(info.rank, dense_rank(unjam::cone_matrix(sys))) << "stride " << stride << " mu " << mu;

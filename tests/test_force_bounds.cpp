@@ -56,7 +56,7 @@ Contact contact(int a, int b, unjam::Vec2 l) {
 Packing two_disk_chain(double mu) {
   Packing p;
   p.cell = {2.0, 10.0};
-  p.meta.mu = mu;
+  p.meta.contact.mu = mu;
   p.particles.resize(2);
   p.particles.x = {0.5, 1.5};
   p.particles.y = {5.0, 5.0};
@@ -72,7 +72,7 @@ Packing two_disk_chain(double mu) {
 Packing square_lattice(double mu) {
   Packing p;
   p.cell = {2.0, 2.0};
-  p.meta.mu = mu;
+  p.meta.contact.mu = mu;
   p.particles.resize(4);
   p.particles.x = {0.5, 1.5, 0.5, 1.5};
   p.particles.y = {0.5, 0.5, 1.5, 1.5};
@@ -228,7 +228,7 @@ TEST(ForceBounds, RaisingMuOnlyWidensIntervals) {
   Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
   const auto contacts = unjam::select_contacts(p);
   const auto sys01 = unjam::build_equilibrium_system(p, contacts);
-  p.meta.mu = 0.3;
+  p.meta.contact.mu = 0.3;
   const auto sys03 = unjam::build_equilibrium_system(p, contacts);
   const auto b01 = unjam::compute_force_bounds(sys01);
   const auto b03 = unjam::compute_force_bounds(sys03);

@@ -90,8 +90,8 @@ Packing awkward_packing() {
   c.fn = 1.0 / 7.0;
   c.ft = -0.0;
   p.contacts = {c};
-  p.meta.P_ext = 0.3;
-  p.meta.mu = 0.1;
+  p.meta.contact.P_ext = 0.3;
+  p.meta.contact.mu = 0.1;
   p.meta.seed = 18446744073709551615ULL;
   p.meta.settings = {{"dt", 0.01}, {"sweeps", 200}};
   p.meta.command = "unjam pack --N 2";
@@ -129,8 +129,8 @@ TEST(PackingIo, RoundTripIsBitExact) {
   EXPECT_TRUE(same_bits(c.gap, d.gap));
   EXPECT_TRUE(same_bits(c.fn, d.fn));
   EXPECT_TRUE(same_bits(c.ft, d.ft));
-  EXPECT_EQ(q.meta.P_ext, p.meta.P_ext);
-  EXPECT_EQ(q.meta.mu, p.meta.mu);
+  EXPECT_EQ(q.meta.contact.P_ext, p.meta.contact.P_ext);
+  EXPECT_EQ(q.meta.contact.mu, p.meta.contact.mu);
   EXPECT_EQ(q.meta.seed, p.meta.seed);
   EXPECT_EQ(q.meta.settings, p.meta.settings);
   EXPECT_EQ(q.meta.command, p.meta.command);
@@ -175,7 +175,7 @@ TEST(PackingIo, FixtureP50Loads) {
   EXPECT_EQ(p.contacts.size(), 82u);
   EXPECT_DOUBLE_EQ(p.cell.Lx, 10.575537479681529);
   EXPECT_EQ(p.cell.Lx, p.cell.Ly);
-  EXPECT_DOUBLE_EQ(p.meta.mu, 0.1);
+  EXPECT_DOUBLE_EQ(p.meta.contact.mu, 0.1);
   EXPECT_EQ(p.meta.seed, 3u);
   EXPECT_NEAR(p.force_unit(), 1.5121258295097544, 1e-12);
   EXPECT_DOUBLE_EQ(p.contacts[0].gap, -7.0503746241179499e-07);  // given in the file
@@ -547,6 +547,61 @@ TEST(CsvTable, WriterRowsRoundTrip) {
   EXPECT_EQ(w.str(), "i,v,s\n-3,0.1,x\n1152921504606846976,-0,y\n");
   w.cell(1);
   EXPECT_THROW(w.end_row(), std::logic_error);
+}
+
+TEST(PackingIo, ContactModelIsTypedAndKeepsItsJsonKeys) {
+  // The typed contact model (PackingMeta::contact) is read from meta.json's mu, P_ext,
+  // settings.dynamics.M_lambda and settings.static.touch_gap and written back to the same
+  // keys: a packing read and written again keeps its settings, old files read.
+  TempDir tmp;
+  const fs::path dir = copy_fixture("p50-mu1", tmp.path());
+  const auto meta0 = nlohmann::json::parse(read_file(dir / "meta.json"));
+  Packing p = read_packing(dir);
+  EXPECT_EQ(p.meta.contact.mu, meta0["mu"].get<double>());
+  EXPECT_EQ(p.meta.contact.P_ext, meta0["P_ext"].get<double>());
+  EXPECT_EQ(p.meta.contact.M_lambda, meta0["settings"]["dynamics"]["M_lambda"].get<double>());
+  EXPECT_EQ(p.meta.contact.touch_gap, meta0["settings"]["static"]["touch_gap"].get<double>());
+  const auto settings_of = [](const fs::path& d) {
+    return nlohmann::json::parse(read_file(d / "meta.json"))["settings"];
+  };
+  write_packing(tmp.path() / "same", p);
+  EXPECT_EQ(settings_of(tmp.path() / "same").dump(), meta0["settings"].dump());
+
+  // A changed model is written to the same keys.
+  p.meta.contact.M_lambda = 0.5;
+  p.meta.contact.touch_gap = 3e-6;
+  write_packing(tmp.path() / "changed", p);
+  const auto changed = settings_of(tmp.path() / "changed");
+  EXPECT_EQ(changed["dynamics"]["M_lambda"].get<double>(), 0.5);
+  EXPECT_EQ(changed["static"]["touch_gap"].get<double>(), 3e-6);
+  const Packing q = read_packing(tmp.path() / "changed");
+  EXPECT_EQ(q.meta.contact.M_lambda, 0.5);
+  EXPECT_EQ(q.meta.contact.touch_gap, 3e-6);
+
+  // Settings without the model's keys (a hand-made packing) read as the defaults and are
+  // written as they are.
+  Packing bare = p;
+  bare.meta.settings = {{"dt", 0.01}};
+  bare.meta.contact.M_lambda = ContactModel{}.M_lambda;
+  bare.meta.contact.touch_gap = ContactModel{}.touch_gap;
+  write_packing(tmp.path() / "bare", bare);
+  EXPECT_EQ(settings_of(tmp.path() / "bare"), bare.meta.settings);
+  const Packing b = read_packing(tmp.path() / "bare");
+  EXPECT_EQ(b.meta.contact.M_lambda, 100.0);
+  EXPECT_EQ(b.meta.contact.touch_gap, 1e-6);
+
+  // A model entry that is not a number is refused when the packing is read.
+  std::string text = read_file(dir / "meta.json");
+  const std::string key = "\"M_lambda\": 100.0";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.replace(text.find(key), key.size(), "\"M_lambda\": \"heavy\"");
+  write_text(dir / "meta.json", text);
+  try {
+    (void)read_packing(dir);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("M_lambda must be a number"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

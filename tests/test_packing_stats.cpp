@@ -21,8 +21,8 @@ Packing two_disks() {
   p.particles.x = {2.0, 3.49};
   p.particles.y = {5.0, 5.0};
   p.particles.radius = {1.0, 0.5};
-  p.meta.P_ext = 1.0;
-  p.meta.mu = 0.5;
+  p.meta.contact.P_ext = 1.0;
+  p.meta.contact.mu = 0.5;
   Contact c;
   c.a = 0;
   c.b = 1;
@@ -77,7 +77,7 @@ TEST(PackingStats, KineticPressureCoulombTensionAndRattlers) {
   p.particles.radius[2] = 1.0;
   p.particles.vx[2] = 0.3;
   p.particles.vy[2] = -0.4;
-  p.meta.mu = 0.0;
+  p.meta.contact.mu = 0.0;
   p.contacts[0].fn = 2.0;
   p.contacts[0].ft = 0.5;  // |ft| - mu fn = 0.5
   Contact tensile = p.contacts[0];

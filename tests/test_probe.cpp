@@ -38,7 +38,7 @@ const Packing& isostatic_packing() {
       gas.N = 60;
       gas.seed = seed;
       Packing q = make_gas(gas);
-      q.meta.mu = 0.0;
+      q.meta.contact.mu = 0.0;
       if (!compact(q, CompactionSettings{}).is_static) continue;
       const PackingStats s = compute_packing_stats(q);
       if (s.isostatic_excess && *s.isostatic_excess == 0) return q;

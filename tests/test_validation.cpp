@@ -82,7 +82,7 @@ TEST(CompactionValidation, OneAndTwoThreadsGiveTheSameStaticPacking) {
     gs.phi = 0.3;
     gs.seed = 3;
     result[t] = make_gas(gs);
-    result[t].meta.mu = 0.1;
+    result[t].meta.contact.mu = 0.1;
     const CompactionResult r = compact(result[t], CompactionSettings{});
     EXPECT_TRUE(r.is_static);
   }

@@ -35,7 +35,7 @@ namespace {
 struct BoundsOptions {
   std::string dir;
   std::string out;          // CSV path; default DIR/bounds.csv, JSON beside it
-  double gap_tol = 1e-9;    // touching: gap <= gap_tol (units of R_max)
+  double gap_tol = 1e-9;    // touching: gap < gap_tol (units of R_max)
   double fn_tol = 1e-9;     // force-carrying: fn > fn_tol F0
   int threads = 0;          // 0: all cores
   std::string method = "barrier";
@@ -102,7 +102,7 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
       {"packing", opt.dir},
       {"N", packing.size()},
       {"mu", sys.mu},
-      {"P_ext", packing.meta.P_ext},
+      {"P_ext", packing.meta.contact.P_ext},
       {"F0", sys.F0},
       {"contacts_listed", packing.contacts.size()},
       {"contacts_used", Nc},
@@ -301,7 +301,7 @@ void add_bounds_command(CLI::App& app) {
                 "admissible force networks (LP)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
-  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap <= gap-tol (R_max)")
+  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap < gap-tol (R_max)")
       ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
       ->capture_default_str()->check(non_negative_number());

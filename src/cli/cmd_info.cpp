@@ -35,7 +35,7 @@ void print_text(const std::string& dir, const Packing& p, const PackingStats& s,
   row("N", std::to_string(s.N));
   row("cell Lx x Ly", num(p.cell.Lx) + " x " + num(p.cell.Ly));
   row("mu", num(s.mu));
-  row("P_ext", num(p.meta.P_ext));
+  row("P_ext", num(p.meta.contact.P_ext));
   row("F0 = 2 R_avg P_ext", num(s.F0));
   row("phi", num(s.phi));
   row("z (rattlers excluded)", num(s.z));

@@ -136,7 +136,7 @@ void run(PackOptions& o) {
   const CompactionHooks hooks = compaction_hooks(o, out);
   const InterruptGuard interrupts;
   std::fprintf(stderr, "unjam pack: N = %zu, mu = %g, P_ext = %g, threads = %d -> %s\n", p.size(),
-               p.meta.mu, p.meta.P_ext, omp_get_max_threads(), out.c_str());
+               p.meta.contact.mu, p.meta.contact.P_ext, omp_get_max_threads(), out.c_str());
   const CompactionResult r = compact(p, o.compaction, hooks);
   write_packing(out, p);
 

@@ -27,9 +27,6 @@
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/campaign_run.hpp"
 #include "unjam/probe/probe_campaign.hpp"
-#include "unjam/protocol/compaction.hpp"
-#include "unjam/protocol/gas.hpp"
-#include "unjam/protocol/settings_json.hpp"
 
 namespace unjam::cli {
 namespace {
@@ -265,7 +262,7 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
 
   std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),
               o.method.c_str(), format_duration(wall).c_str(), out.c_str());
-  std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.mu, stats.phi,
+  std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.contact.mu, stats.phi,
               stats.z, sum.F_cont_over_F0);
   std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d\n", sum.F_crit_over_F_cont, sum.not_converged);
   if (sum.has_fit)

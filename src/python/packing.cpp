@@ -92,8 +92,8 @@ void bind_packing(py::module_& m) {
       .def_property_readonly("contacts", [](py::object self) { return contact_columns(self.cast<const Packing&>(), self); },
                              "views of the contact list: a, b (int32), n, l (M, 2), gap, fn, ft "
                              "(float64); force on b = fn n + ft t, t = (-ny, nx)")
-      .def_property_readonly("mu", [](const Packing& p) { return p.meta.mu; })
-      .def_property_readonly("P_ext", [](const Packing& p) { return p.meta.P_ext; })
+      .def_property_readonly("mu", [](const Packing& p) { return p.meta.contact.mu; })
+      .def_property_readonly("P_ext", [](const Packing& p) { return p.meta.contact.P_ext; })
       .def_property_readonly("F0", &Packing::force_unit, "force unit 2 R_avg P_ext")
       .def_property_readonly("phi", &Packing::packing_fraction)
       .def_property_readonly("seed", [](const Packing& p) { return p.meta.seed; })
@@ -108,7 +108,7 @@ void bind_packing(py::module_& m) {
            "write the packing directory (meta.json, particles.csv, contacts.csv), atomically")
       .def("__repr__", [](const Packing& p) {
         return "<unjam.Packing N=" + std::to_string(p.size()) + " contacts=" +
-               std::to_string(p.contacts.size()) + " mu=" + py::str(py::float_(p.meta.mu)).cast<std::string>() + ">";
+               std::to_string(p.contacts.size()) + " mu=" + py::str(py::float_(p.meta.contact.mu)).cast<std::string>() + ">";
       });
 
   m.def("read_packing", &read_packing, py::arg("dir"), py::call_guard<py::gil_scoped_release>(),

@@ -28,7 +28,7 @@ PackingStats compute_packing_stats(const Packing& packing, double force_threshol
   const double V = packing.cell.area();
   PackingStats s;
   s.N = packing.size();
-  s.mu = packing.meta.mu;
+  s.mu = packing.meta.contact.mu;
   s.F0 = packing.force_unit();
   s.contacts = packing.contacts.size();
 
@@ -74,7 +74,7 @@ PackingStats compute_packing_stats(const Packing& packing, double force_threshol
   if (s.N > 0) s.mean_force_residual = sum_residual / static_cast<double>(s.N);
 
   s.P_in = (virial + kinetic) / (2.0 * V);
-  s.pressure_ratio = s.P_in / packing.meta.P_ext;
+  s.pressure_ratio = s.P_in / packing.meta.contact.P_ext;
 
   if (s.mu == 0.0)
     s.isostatic_excess = static_cast<std::int64_t>(s.N_c) - (2 * static_cast<std::int64_t>(s.N_prime) - 1);
@@ -159,7 +159,7 @@ nlohmann::ordered_json stats_json(const Packing& p, const PackingStats& s, doubl
       {"N", s.N},
       {"Lx", p.cell.Lx},
       {"Ly", p.cell.Ly},
-      {"P_ext", p.meta.P_ext},
+      {"P_ext", p.meta.contact.P_ext},
       {"mu", s.mu},
       {"F0", s.F0},
       {"phi", s.phi},

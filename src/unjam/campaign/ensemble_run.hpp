@@ -34,7 +34,7 @@ struct EnsembleSettings {
   double probe_g = 1e-9;          // probe opening (R_max)
   double probe_dt = 1e-3;         // nlgs probe time step (t0)
   double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
-  double gap_tol = 1e-9;          // admissible set: touching, gap <= gap_tol (R_max) ...
+  double gap_tol = 1e-9;          // admissible set: touching, gap < gap_tol (R_max) ...
   double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
   int threads = 0;                // LP bounds and probes; 0: omp_get_max_threads()
   std::function<void(const ForceNetwork&)> on_sample;  // every hit-and-run sample; may be empty

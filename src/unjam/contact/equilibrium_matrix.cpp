@@ -17,7 +17,8 @@ std::vector<int> select_contacts(const Packing& packing, double gap_tol, double 
   std::vector<int> selected;
   for (std::size_t k = 0; k < packing.contacts.size(); ++k) {
     const Contact& c = packing.contacts[k];
-    if (c.fn > fn_tol * F0 || c.gap <= gap_tol) selected.push_back(static_cast<int>(k));
+    const ContactClass state = classify_contact(c, gap_tol, fn_tol * F0);
+    if (state.touching || state.loaded) selected.push_back(static_cast<int>(k));
   }
   return selected;
 }
@@ -27,7 +28,7 @@ EquilibriumSystem build_equilibrium_system(const Packing& packing,
   const int N = static_cast<int>(packing.size());
   EquilibriumSystem sys;
   sys.contacts = contacts;
-  sys.mu = packing.meta.mu;
+  sys.mu = packing.meta.contact.mu;
   sys.F0 = packing.force_unit();
 
   // Row blocks: grains in increasing index order.
@@ -76,7 +77,7 @@ EquilibriumSystem build_equilibrium_system(const Packing& packing,
   sys.A.setFromTriplets(triplets.begin(), triplets.end());
   sys.A.makeCompressed();
   sys.rhs = Eigen::VectorXd::Zero(rows);
-  sys.rhs[rows - 1] = 2.0 * packing.cell.area() * packing.meta.P_ext;
+  sys.rhs[rows - 1] = 2.0 * packing.cell.area() * packing.meta.contact.P_ext;
   return sys;
 }
 

@@ -28,12 +28,14 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/packing/packing.hpp"
 
 namespace unjam {
 
 // Contacts that enter the admissible set: those carrying force (fn > fn_tol F0) or touching
-// (gap <= gap_tol, lengths in units of R_max). Returns indices into packing.contacts.
+// (gap < gap_tol, lengths in units of R_max), by classify_contact (packing/contact_model.hpp).
+// Returns indices into packing.contacts.
 std::vector<int> select_contacts(const Packing& packing, double gap_tol = 1e-9,
                                  double fn_tol = 1e-9);
 

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "unjam/core/error.hpp"
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/solver/static_solve.hpp"
 
 namespace unjam {
@@ -17,20 +18,16 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
 
   // The copy the solver relaxes: the same grains and cell, only the contacts of the set, in
   // the order of system.contacts (solve_static keeps the order). Every contact of the set
-  // touches: touch_gap lies above the largest gap among them.
+  // touches: the solve's touch gap covers the set (touch_gap_covering).
   Packing work = packing;
   work.contacts.clear();
-  double max_gap = 0.0;
-  for (const int c : system.contacts) {
-    work.contacts.push_back(packing.contacts[c]);
-    max_gap = std::max(max_gap, packing.contacts[c].gap);
-  }
+  for (const int c : system.contacts) work.contacts.push_back(packing.contacts[c]);
   StaticSolveSettings solve;
   solve.tol = options.tol;
   solve.max_sweeps = options.max_sweeps;
-  solve.touch_gap = std::max(solve.touch_gap, 2.0 * max_gap);
+  solve.touch_gap = touch_gap_covering(work.contacts, solve.touch_gap);
   Bath bath;
-  bath.P_ext = packing.meta.P_ext;
+  bath.P_ext = packing.meta.contact.P_ext;
   NlgsThreading threading;  // measurements of Threading::kAuto, shared by the walk's solves
 
   RandomWalkResult result;

@@ -74,7 +74,7 @@ void field_data(std::string& out, const Packing& p, const GrainDisplacement* fie
                 const ExportRecord& record) {
   out += "    <FieldData>\n";
   const std::pair<const char*, double> numbers[] = {
-      {"Lx", p.cell.Lx}, {"Ly", p.cell.Ly}, {"mu", p.meta.mu}, {"P_ext", p.meta.P_ext},
+      {"Lx", p.cell.Lx}, {"Ly", p.cell.Ly}, {"mu", p.meta.contact.mu}, {"P_ext", p.meta.contact.P_ext},
       {"F0", p.force_unit()}, {"probed_contact", field ? double(field->contact) : -1.0}};
   for (const auto& [name, v] : numbers) {
     out += "      <DataArray type=\"Float64\" Name=\"" + std::string(name) +
@@ -128,7 +128,7 @@ void cell_data(std::string& out, const Packing& p) {
   data_array(out, "Float64", "ft", m, 1, [&](std::size_t k, int) { return C[k].ft; });
   data_array(out, "Float64", "fn_over_F0", m, 1, [&](std::size_t k, int) { return C[k].fn / F0; });
   data_array(out, "Int32", "state", m, 1, [&](std::size_t k, int) {
-    return double(contact_state(C[k].fn, C[k].ft, p.meta.mu, kExportStateTol * F0));
+    return double(contact_state(C[k].fn, C[k].ft, p.meta.contact.mu, kExportStateTol * F0));
   });
   out += "      </CellData>\n";
 }
@@ -207,9 +207,9 @@ std::string extended_xyz(const Packing& p, const GrainDisplacement* field,
   out += "\" Properties=id:I:1:pos:R:3:radius:R:1:velo:R:3:omega:R:1";
   if (field) out += ":disp:R:3:disp_g:R:3:rot:R:1";
   out += " pbc=\"T T F\" mu=";
-  append_number(out, p.meta.mu);
+  append_number(out, p.meta.contact.mu);
   out += " P_ext=";
-  append_number(out, p.meta.P_ext);
+  append_number(out, p.meta.contact.P_ext);
   out += " F0=";
   append_number(out, p.force_unit());
   out += " seed=" + std::to_string(p.meta.seed);

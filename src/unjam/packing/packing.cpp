@@ -19,7 +19,7 @@ std::vector<char> Packing::loaded_grains(double fn_min) const {
   return loaded;
 }
 
-double Packing::force_unit() const { return unjam::force_unit(mean_radius(), meta.P_ext); }
+double Packing::force_unit() const { return unjam::force_unit(mean_radius(), meta.contact.P_ext); }
 
 double Packing::min_cell_side() const {
   double R1 = 0.0, R2 = 0.0;

@@ -9,6 +9,7 @@
 
 #include "unjam/core/cell.hpp"
 #include "unjam/packing/contact.hpp"
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/packing/particles.hpp"
 
 namespace unjam {
@@ -22,10 +23,14 @@ struct RunState {
 };
 
 struct PackingMeta {
-  double P_ext = 1.0;           // external pressure (pressure unit)
-  double mu = 0.0;              // Coulomb friction coefficient
+  // The contact model every contact problem of the packing is built with: mu and P_ext
+  // (meta.json "mu", "P_ext"), the bath mass and the touch gap (meta.json
+  // settings.dynamics.M_lambda and settings.static.touch_gap; docs/packing-format.md).
+  ContactModel contact;
   std::uint64_t seed = 0;       // seed of the gas the packing was compacted from
-  nlohmann::json settings = nlohmann::json::object();  // solver and protocol settings
+  // Solver and protocol settings (protocol/settings_json); its M_lambda and touch_gap are
+  // written from `contact`.
+  nlohmann::json settings = nlohmann::json::object();
   std::string command;          // the command line that made it
   std::string program_version;  // unjam version that wrote it
 };

@@ -47,6 +47,36 @@ double meta_number_or(const json& meta, const std::string& where, const char* ke
   return meta.contains(key) ? meta_number(meta, where, key) : fallback;
 }
 
+// The contact model's entries of "settings" (PackingMeta::contact): settings[group][key], or
+// nullptr where settings, its group or the key is missing.
+const json* model_entry(const json& settings, const char* group, const char* key) {
+  if (!settings.is_object()) return nullptr;
+  const auto g = settings.find(group);
+  if (g == settings.end() || !g->is_object()) return nullptr;
+  const auto k = g->find(key);
+  return k == g->end() ? nullptr : &*k;
+}
+
+void read_model_entry(const json& settings, const char* group, const char* key, const std::string& where,
+                      double& value) {
+  if (const json* v = model_entry(settings, group, key)) {
+    if (!v->is_number())
+      throw Error(where + ": 'settings' " + group + "." + key + " must be a number, found " + v->dump());
+    value = v->get<double>();
+  }
+}
+
+// Stores value as settings[group][key] unless that already holds it, or (missing) value is the
+// default: a packing read and written again keeps its bytes.
+void write_model_entry(json& settings, const char* group, const char* key, double value, double default_value) {
+  const json* v = model_entry(settings, group, key);
+  if (v ? v->is_number() && v->get<double>() == value : value == default_value) return;
+  if (!settings.is_object()) settings = json::object();
+  json& g = settings[group];
+  if (!g.is_object()) g = json::object();
+  g[key] = value;
+}
+
 // The value of an optional string key, empty if absent.
 std::string meta_string_or(const json& meta, const std::string& where, const char* key) {
   const auto it = meta.find(key);
@@ -97,10 +127,10 @@ MetaFile read_meta(const fs::path& path, const std::string& text, Packing& p) {
     throw Error(where + ": missing the cell size ('L', or 'Lx' and 'Ly')");
   }
   if (!(p.cell.Lx > 0.0 && p.cell.Ly > 0.0)) throw Error(where + ": the cell size must be positive");
-  p.meta.P_ext = meta_number(meta, where, "P_ext");
-  if (!(p.meta.P_ext > 0.0)) throw Error(where + ": 'P_ext' must be positive");
-  p.meta.mu = meta_number(meta, where, "mu");
-  if (p.meta.mu < 0.0) throw Error(where + ": 'mu' must not be negative");
+  p.meta.contact.P_ext = meta_number(meta, where, "P_ext");
+  if (!(p.meta.contact.P_ext > 0.0)) throw Error(where + ": 'P_ext' must be positive");
+  p.meta.contact.mu = meta_number(meta, where, "mu");
+  if (p.meta.contact.mu < 0.0) throw Error(where + ": 'mu' must not be negative");
 
   if (const auto it = meta.find("N"); it != meta.end()) m.N = meta_integer(*it, where, "N");
   if (const auto it = meta.find("seed"); it != meta.end()) {
@@ -108,6 +138,8 @@ MetaFile read_meta(const fs::path& path, const std::string& text, Packing& p) {
     p.meta.seed = it->get<std::uint64_t>();
   }
   if (const auto it = meta.find("settings"); it != meta.end()) p.meta.settings = *it;
+  read_model_entry(p.meta.settings, "dynamics", "M_lambda", where, p.meta.contact.M_lambda);
+  read_model_entry(p.meta.settings, "static", "touch_gap", where, p.meta.contact.touch_gap);
   p.meta.command = meta_string_or(meta, where, "command");
   p.meta.program_version = meta_string_or(meta, where, "program_version");
 
@@ -389,11 +421,15 @@ void write_packing(const fs::path& dir, const Packing& p) {
   meta["Lx"] = p.cell.Lx;
   meta["Ly"] = p.cell.Ly;
   if (p.cell.Lx == p.cell.Ly) meta["L"] = p.cell.Lx;
-  meta["P_ext"] = p.meta.P_ext;
-  meta["mu"] = p.meta.mu;
+  meta["P_ext"] = p.meta.contact.P_ext;
+  meta["mu"] = p.meta.contact.mu;
   meta["seed"] = p.meta.seed;
   meta["F0"] = p.force_unit();
-  meta["settings"] = nlohmann::ordered_json(p.meta.settings);
+  nlohmann::json settings = p.meta.settings;
+  const ContactModel defaults;
+  write_model_entry(settings, "dynamics", "M_lambda", p.meta.contact.M_lambda, defaults.M_lambda);
+  write_model_entry(settings, "static", "touch_gap", p.meta.contact.touch_gap, defaults.touch_gap);
+  meta["settings"] = nlohmann::ordered_json(settings);
   meta["command"] = p.meta.command;
   meta["state"] = {{"time", p.state.time},
                    {"step", p.state.step},

@@ -66,7 +66,7 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
   nlohmann::json j = {
       {"seed", p.meta.seed},
       {"N", p.size()},
-      {"mu", p.meta.mu},
+      {"mu", p.meta.contact.mu},
       {"phi", stats.phi},
       {"z", stats.z},
       {"F0", p.force_unit()},

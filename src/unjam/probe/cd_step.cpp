@@ -12,30 +12,8 @@
 #include "unjam/core/error.hpp"
 #include "unjam/core/lemke.hpp"
 #include "unjam/packing/csv_table.hpp"
-#include "unjam/solver/step_problem.hpp"
 
 namespace unjam {
-
-Eigen::MatrixXd CdStepProblem::delassus() const {
-  const Eigen::MatrixXd A = Eigen::MatrixXd(system.A);
-  return A.transpose() * inverse_mass.asDiagonal() * A;
-}
-
-Eigen::VectorXd CdStepProblem::local_free() const {
-  Eigen::VectorXd q = -(system.A.transpose() * inverse_mass.cwiseProduct(system.rhs));
-  for (int k = 0; k < num_contacts(); ++k) q[2 * k] += g_eff[k] / (dt * dt);
-  return q;
-}
-
-Eigen::VectorXd CdStepProblem::generalized_displacement(const Eigen::VectorXd& f) const {
-  return (dt * dt) * inverse_mass.cwiseProduct(system.A * f - system.rhs);
-}
-
-Eigen::VectorXd CdStepProblem::relative_displacement(const Eigen::VectorXd& f) const {
-  Eigen::VectorXd u = system.A.transpose() * generalized_displacement(f);
-  for (int k = 0; k < num_contacts(); ++k) u[2 * k] += g_eff[k];
-  return u;
-}
 
 CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSettings& settings) {
   const int nc = static_cast<int>(packing.contacts.size());
@@ -43,45 +21,12 @@ CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSett
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(nc) + ")");
   CdStepProblem pb;
-  std::vector<int> all(nc);
-  std::iota(all.begin(), all.end(), 0);
-  pb.system = build_equilibrium_system(packing, all);
+  static_cast<ContactProblem&>(pb) = build_contact_problem(
+      packing, packing_contact_model(packing, settings.bath.M_lambda, settings.touch_gap), settings.dt);
   pb.probed = contact;
   pb.g = settings.g;
-  pb.dt = settings.dt;
-  pb.inverse_mass.resize(pb.system.A.rows());
-  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
-    const double m = packing.particles.mass(pb.system.grains[i]);
-    pb.inverse_mass[3 * i] = pb.inverse_mass[3 * i + 1] = 1.0 / m;
-    pb.inverse_mass[3 * i + 2] = 2.0 / m;  // coordinate R theta: mass I / R^2 = m / 2
-  }
-  pb.inverse_mass[pb.system.pressure_row()] =
-      1.0 / (2.0 * packing.cell.area() * settings.bath.M_lambda);
-  const std::vector<double> g_eff = touching_gaps(packing.contacts, settings.touch_gap);
-  pb.g_eff = Eigen::Map<const Eigen::VectorXd>(g_eff.data(), nc);
   pb.g_eff[contact] = -settings.g;
   return pb;
-}
-
-double CdStepResidual::max() const {
-  return std::max({penetration, complementarity, coulomb, sticking_slip, sliding_direction});
-}
-
-CdStepResidual cd_step_residual(const CdStepProblem& pb, const Eigen::VectorXd& f) {
-  const Eigen::VectorXd u = pb.relative_displacement(f);
-  const double mu = pb.system.mu, F0 = pb.system.F0, g = pb.g;
-  CdStepResidual r;
-  for (int k = 0; k < pb.num_contacts(); ++k) {
-    const double fn = f[2 * k], ft = f[2 * k + 1];
-    const double un = u[2 * k] / g, ut = u[2 * k + 1] / g;
-    r.penetration = std::max(r.penetration, -un);
-    r.complementarity = std::max(r.complementarity, std::min(un, fn / F0));
-    r.coulomb = std::max({r.coulomb, (std::abs(ft) - mu * fn) / F0, -fn / F0});
-    r.sticking_slip = std::max(r.sticking_slip, std::min(std::abs(ut), (mu * fn - std::abs(ft)) / F0));
-    if (ft * ut > 0.0)
-      r.sliding_direction = std::max(r.sliding_direction, std::min(std::abs(ut), std::abs(ft) / F0));
-  }
-  return r;
 }
 
 void write_siconos_problem(const CdStepProblem& pb, const std::filesystem::path& file) {

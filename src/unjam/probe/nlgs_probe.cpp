@@ -2,21 +2,29 @@
 
 #include <algorithm>
 
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/solver/nlgs.hpp"
 
 namespace unjam {
 
 ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& set) {
+  Eigen::VectorXd f;
+  return probe_nlgs(packing, contact, set, f);
+}
+
+ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& set,
+                       Eigen::VectorXd& f) {
   if (contact < 0 || contact >= static_cast<int>(packing.contacts.size()))
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(packing.contacts.size()) + ")");
   Contacts contacts = packing.contacts;
   Particles particles = packing.particles;
 
-  StepProblem pb{packing.cell, set.dt, packing.meta.mu, set.bath, 0.0,
-                 touching_gaps(contacts, set.touch_gap)};
-  pb.bath.P_ext = packing.meta.P_ext;
+  const ContactProblem problem = build_contact_problem(
+      packing, packing_contact_model(packing, set.bath.M_lambda, set.touch_gap), set.dt);
+  StepProblem pb = step_problem(problem);
+  pb.bath.enabled = set.bath.enabled;
   pb.g_eff[contact] = -set.g;
 
   NlgsSettings nlgs;
@@ -48,6 +56,11 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   r.residual = res.max_dU / (set.g / set.dt);
   r.f_crit = contacts[contact].fn;
   r.lambda_dt = res.lambda * set.dt;
+  f.resize(2 * static_cast<Eigen::Index>(contacts.size()));
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    f[2 * k] = contacts[k].fn;
+    f[2 * k + 1] = contacts[k].ft;
+  }
   r.u.resize(particles.size());
   r.u_rot.resize(particles.size());
   for (std::size_t i = 0; i < particles.size(); ++i) {

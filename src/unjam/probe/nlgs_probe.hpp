@@ -11,6 +11,8 @@
 // cost grows like (L/d)^2 sweeps and more, see kinematic_probe.hpp for the fast route.
 #include <cstdint>
 
+#include <Eigen/Core>
+
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_result.hpp"
 #include "unjam/solver/step_problem.hpp"
@@ -28,7 +30,14 @@ struct ProbeSettings {
   std::uint64_t seed = 0;
 };
 
-// Probes contact `contact` of a static packing (not modified).
+// Probes contact `contact` of a static packing (not modified). The step is the packing's
+// ContactProblem (contact/contact_problem.hpp: its own mu and P_ext, settings.touch_gap,
+// settings.bath.M_lambda, settings.dt) with g_eff = -settings.g on the probed contact.
 ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& settings);
+
+// The same, and the forces of the step's solution in f = (fn_0, ft_0, fn_1, ...), in the
+// order of packing.contacts (the columns of the ContactProblem), for step_residual.
+ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& settings,
+                       Eigen::VectorXd& f);
 
 }  // namespace unjam

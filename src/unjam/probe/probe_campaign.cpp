@@ -137,10 +137,10 @@ CdPathStart cd_start_from_name(const std::string& name) {
 CampaignSettings campaign_settings_for(const Packing& p) {
   CompactionSettings cs;
   GasSettings gas;
-  from_json(p.meta.settings, cs, gas);
+  from_json(p.meta.settings, cs, gas);  // refuses recorded settings that `pack --resume` would refuse
   CampaignSettings s;
-  s.nlgs.touch_gap = s.kinematic.touch_gap = cs.final_solve.touch_gap;
-  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = cs.dynamics.bath.M_lambda;
+  s.nlgs.touch_gap = s.kinematic.touch_gap = p.meta.contact.touch_gap;
+  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = p.meta.contact.M_lambda;
   return s;
 }
 

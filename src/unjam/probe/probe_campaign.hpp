@@ -83,7 +83,8 @@ struct CampaignSummary {
 };
 
 // The settings `unjam probe` starts from: the defaults, with the packing's touch gap (of its
-// static solve) and bath mass M_lambda, as recorded in meta.settings.
+// static solve) and bath mass M_lambda, its typed contact model (meta.contact). Throws
+// unjam::Error for recorded settings (meta.settings) of the wrong type or range.
 CampaignSettings campaign_settings_for(const Packing& packing);
 
 // Throws unjam::Error unless g, dt and velocity_tol are positive and finite.

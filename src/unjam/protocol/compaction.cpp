@@ -47,7 +47,7 @@ double mean_speed_of_loaded_grains(const Packing& p) {
 }
 
 CompactionResult compact(Packing& p, const CompactionSettings& s, const CompactionHooks& hooks) {
-  validate(s, p.meta.mu);
+  validate(s, p.meta.contact.mu);
   CompactionResult res;
   const auto start = Clock::now();
   auto last_progress = start, last_checkpoint = start;

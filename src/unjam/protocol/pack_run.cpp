@@ -10,8 +10,8 @@ namespace unjam {
 
 Packing gas_packing(const GasSettings& gas, double mu, double P_ext) {
   Packing p = make_gas(gas);
-  p.meta.mu = mu;
-  p.meta.P_ext = P_ext;
+  p.meta.contact.mu = mu;
+  p.meta.contact.P_ext = P_ext;
   return p;
 }
 
@@ -19,6 +19,7 @@ Packing stopped_packing(const std::filesystem::path& dir, CompactionSettings& se
                         GasSettings& gas) {
   Packing p = read_packing(dir);
   from_json(p.meta.settings, settings, gas);
+  apply_contact_model(p.meta.contact, settings);
   return p;
 }
 

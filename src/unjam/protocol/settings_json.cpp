@@ -66,19 +66,27 @@ void from_json(const nlohmann::json& j, CompactionSettings& s, GasSettings& g) {
   }
 }
 
+void apply_contact_model(const ContactModel& model, CompactionSettings& settings) {
+  settings.dynamics.bath.M_lambda = model.M_lambda;
+  settings.final_solve.touch_gap = model.touch_gap;
+}
+
 void prepare_compaction(Packing& p, CompactionSettings& settings, const GasSettings& gas,
                         const std::string& command) {
-  settings.dynamics.bath.P_ext = p.meta.P_ext;
-  validate(settings, p.meta.mu);
+  settings.dynamics.bath.P_ext = p.meta.contact.P_ext;
+  validate(settings, p.meta.contact.mu);
   p.meta.settings = to_json(settings, gas);
+  p.meta.contact.M_lambda = settings.dynamics.bath.M_lambda;
+  p.meta.contact.touch_gap = settings.final_solve.touch_gap;
   p.meta.command = command;
 }
 
 void prepare_relaxation(Packing& p, double mu, double P_ext, CompactionSettings& settings,
                         GasSettings& gas) {
   from_json(p.meta.settings, settings, gas);
-  p.meta.mu = mu;
-  p.meta.P_ext = P_ext;
+  apply_contact_model(p.meta.contact, settings);
+  p.meta.contact.mu = mu;
+  p.meta.contact.P_ext = P_ext;
 }
 
 }  // namespace unjam

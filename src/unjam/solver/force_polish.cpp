@@ -6,6 +6,7 @@
 
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/least_norm.hpp"
+#include "unjam/packing/contact_model.hpp"
 
 namespace unjam {
 namespace {
@@ -26,10 +27,12 @@ std::pair<double, double> residuals(const EquilibriumSystem& sys, const Eigen::V
 }  // namespace
 
 PolishResult polish_forces(Packing& packing, double tol, double touch_gap) {
-  const double mu = packing.meta.mu;
+  const double mu = packing.meta.contact.mu;
   std::vector<int> loaded;
-  for (int k = 0; k < static_cast<int>(packing.contacts.size()); ++k)
-    if (packing.contacts[k].fn > 0.0 && packing.contacts[k].gap < touch_gap) loaded.push_back(k);
+  for (int k = 0; k < static_cast<int>(packing.contacts.size()); ++k) {
+    const ContactClass state = classify_contact(packing.contacts[k], touch_gap, 0.0);
+    if (state.touching && state.loaded) loaded.push_back(k);
+  }
   PolishResult res;
   if (loaded.empty()) return res;
   const EquilibriumSystem sys = build_equilibrium_system(packing, loaded);

@@ -23,7 +23,8 @@ struct PolishResult {
 };
 
 // Polishes packing.contacts in place when it succeeds; leaves them untouched otherwise.
-// Only touching pairs (gap < touch_gap) may carry force; any other is set open.
+// Only pairs that touch and carry force (classify_contact with touch_gap and fn_min = 0,
+// packing/contact_model.hpp) enter; any other is set open.
 PolishResult polish_forces(Packing& packing, double tol, double touch_gap);
 
 }  // namespace unjam

@@ -25,7 +25,7 @@ StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSe
 StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSettings& set,
                                NlgsThreading& threading) {
   update_contact_geometry(p.particles, p.cell, p.contacts);
-  const StepProblem pb{p.cell, set.dt, p.meta.mu, bath, 0.0, touching_gaps(p.contacts, set.touch_gap)};
+  const StepProblem pb{p.cell, set.dt, p.meta.contact.mu, bath, 0.0, touching_gaps(p.contacts, set.touch_gap)};
 
   NlgsSettings nlgs;
   nlgs.rule = Convergence::kStatic;

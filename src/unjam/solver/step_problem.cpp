@@ -13,8 +13,21 @@ std::vector<double> positive_gaps(const Contacts& contacts) {
 std::vector<double> touching_gaps(const Contacts& contacts, double touch_gap) {
   std::vector<double> g(contacts.size());
   for (std::size_t k = 0; k < contacts.size(); ++k)
-    g[k] = contacts[k].gap < touch_gap ? 0.0 : contacts[k].gap;
+    g[k] = classify_contact(contacts[k], touch_gap, 0.0).touching ? 0.0 : contacts[k].gap;
   return g;
+}
+
+StepProblem step_problem(const ContactProblem& problem) {
+  StepProblem pb;
+  pb.cell = problem.cell;
+  pb.dt = problem.dt;
+  pb.mu = problem.model.mu;
+  pb.bath.enabled = true;
+  pb.bath.P_ext = problem.model.P_ext;
+  pb.bath.M_lambda = problem.model.M_lambda;
+  pb.lambda_t = 0.0;
+  pb.g_eff.assign(problem.g_eff.data(), problem.g_eff.data() + problem.g_eff.size());
+  return pb;
 }
 
 }  // namespace unjam

@@ -5,6 +5,7 @@
 // Particles (velocities: free velocities in, velocities at t+dt out).
 #include <vector>
 
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/cell.hpp"
 #include "unjam/packing/contact.hpp"
 
@@ -32,8 +33,13 @@ struct StepProblem {
 // g_eff = max(gap, 0) for every contact.
 std::vector<double> positive_gaps(const Contacts& contacts);
 
-// g_eff of a static packing's contacts: 0 for pairs that touch (gap < touch_gap, overlaps
-// included), the gap otherwise. The static solve and the probe use it.
+// g_eff of a static packing's contacts: 0 for pairs that touch (classify_contact: gap <
+// touch_gap, overlaps included), the gap otherwise, as build_contact_problem sets it. The
+// static solve uses it.
 std::vector<double> touching_gaps(const Contacts& contacts, double touch_gap);
+
+// The step of `problem` for solve_nlgs: its cell, dt, mu, bath (P_ext, M_lambda; enabled)
+// and g_eff, starting at rest (lambda_t = 0).
+StepProblem step_problem(const ContactProblem& problem);
 
 }  // namespace unjam

@@ -28,7 +28,7 @@ StepReport advance(Packing& p, const DynamicsSettings& set, NlgsThreading& threa
   rep.detection = std::max(set.min_detection, 2.0 * dt * approach);
   p.contacts = detect_contacts(P, p.cell, rep.detection, p.contacts);
 
-  StepProblem pb{p.cell, dt, p.meta.mu, set.bath, p.state.lambda, positive_gaps(p.contacts)};
+  StepProblem pb{p.cell, dt, p.meta.contact.mu, set.bath, p.state.lambda, positive_gaps(p.contacts)};
   NlgsSettings nlgs = set.nlgs;
   nlgs.seed = set.nlgs.seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(p.state.step);
   const NlgsResult res = solve_nlgs(pb, nlgs, p.contacts, P, threading);

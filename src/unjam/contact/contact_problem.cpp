@@ -1,0 +1,89 @@
+#include "unjam/contact/contact_problem.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "unjam/core/units.hpp"
+
+namespace unjam {
+
+Eigen::MatrixXd ContactProblem::delassus() const {
+  const Eigen::MatrixXd A = Eigen::MatrixXd(system.A);
+  return A.transpose() * inverse_mass.asDiagonal() * A;
+}
+
+Eigen::VectorXd ContactProblem::local_free() const {
+  Eigen::VectorXd q = -(system.A.transpose() * inverse_mass.cwiseProduct(system.rhs));
+  for (int k = 0; k < num_contacts(); ++k) q[2 * k] += g_eff[k] / (dt * dt);
+  return q;
+}
+
+Eigen::VectorXd ContactProblem::generalized_displacement(const Eigen::VectorXd& f) const {
+  return (dt * dt) * inverse_mass.cwiseProduct(system.A * f - system.rhs);
+}
+
+Eigen::VectorXd ContactProblem::relative_displacement(const Eigen::VectorXd& f) const {
+  Eigen::VectorXd u = system.A.transpose() * generalized_displacement(f);
+  for (int k = 0; k < num_contacts(); ++k) u[2 * k] += g_eff[k];
+  return u;
+}
+
+ContactModel packing_contact_model(const Packing& packing, double M_lambda, double touch_gap) {
+  ContactModel model = packing.meta.contact;
+  model.M_lambda = M_lambda;
+  model.touch_gap = touch_gap;
+  return model;
+}
+
+ContactProblem build_contact_problem(const Packing& packing, const ContactModel& model, double dt) {
+  const int nc = static_cast<int>(packing.contacts.size());
+  ContactProblem pb;
+  pb.cell = packing.cell;
+  pb.model = model;
+  pb.dt = dt;
+  std::vector<int> all(nc);
+  std::iota(all.begin(), all.end(), 0);
+  pb.system = build_equilibrium_system(packing, all);
+  pb.system.mu = model.mu;
+  pb.system.F0 = force_unit(packing.mean_radius(), model.P_ext);
+  pb.system.rhs[pb.system.pressure_row()] = 2.0 * packing.cell.area() * model.P_ext;
+  pb.inverse_mass.resize(pb.system.A.rows());
+  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
+    const double m = packing.particles.mass(pb.system.grains[i]);
+    pb.inverse_mass[3 * i] = pb.inverse_mass[3 * i + 1] = 1.0 / m;
+    pb.inverse_mass[3 * i + 2] = 2.0 / m;  // coordinate R theta: mass I / R^2 = m / 2
+  }
+  pb.inverse_mass[pb.system.pressure_row()] = 1.0 / (2.0 * packing.cell.area() * model.M_lambda);
+  pb.g_eff.resize(nc);
+  pb.state.resize(nc);
+  for (int k = 0; k < nc; ++k) {
+    const Contact& c = packing.contacts[k];
+    pb.state[k] = classify_contact(c, model.touch_gap, 0.0);
+    pb.g_eff[k] = pb.state[k].touching ? 0.0 : c.gap;
+  }
+  return pb;
+}
+
+double StepResidual::max() const {
+  return std::max({penetration, complementarity, coulomb, sticking_slip, sliding_direction});
+}
+
+StepResidual step_residual(const ContactProblem& pb, const Eigen::VectorXd& f, double length) {
+  const Eigen::VectorXd u = pb.relative_displacement(f);
+  const double mu = pb.system.mu, F0 = pb.system.F0;
+  StepResidual r;
+  for (int k = 0; k < pb.num_contacts(); ++k) {
+    const double fn = f[2 * k], ft = f[2 * k + 1];
+    const double un = u[2 * k] / length, ut = u[2 * k + 1] / length;
+    r.penetration = std::max(r.penetration, -un);
+    r.complementarity = std::max(r.complementarity, std::min(un, fn / F0));
+    r.coulomb = std::max({r.coulomb, (std::abs(ft) - mu * fn) / F0, -fn / F0});
+    r.sticking_slip = std::max(r.sticking_slip, std::min(std::abs(ut), (mu * fn - std::abs(ft)) / F0));
+    if (ft * ut > 0.0)
+      r.sliding_direction = std::max(r.sliding_direction, std::min(std::abs(ut), std::abs(ft) / F0));
+  }
+  return r;
+}
+
+}  // namespace unjam

@@ -1,0 +1,158 @@
+// The one contact problem (contact/contact_problem.hpp; docs/method.md, "Which contacts
+// count"): every solver of the probe step is checked by the same residual, step_residual, and
+// every consumer classifies the same contacts as touching from the same ContactProblem.
+#include <gtest/gtest.h>
+
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "unjam/campaign/ensemble_run.hpp"
+#include "unjam/contact/contact_problem.hpp"
+#include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/cd_path.hpp"
+#include "unjam/probe/cd_step.hpp"
+#include "unjam/probe/kinematic_probe.hpp"
+#include "unjam/probe/nlgs_probe.hpp"
+#include "unjam/probe/probe_campaign.hpp"
+#include "unjam/solver/step_problem.hpp"
+
+namespace unjam {
+namespace {
+
+Packing fixture(const std::string& name) {
+  return read_packing(std::string(UNJAM_FIXTURES_DIR) + "/" + name);
+}
+
+// The packing's own contact problem, as `unjam probe` builds it (campaign_settings_for).
+ContactProblem own_problem(const Packing& p) {
+  const ProbeSettings s = campaign_settings_for(p).nlgs;
+  return build_contact_problem(p, packing_contact_model(p, s.bath.M_lambda, s.touch_gap), s.dt);
+}
+
+// An NLGS solution, converged on velocity changes of 1e-6 g / dt, leaves a residual of this
+// (units of g and F0) in the step (measured on p50-mu0.1, contact 1: 1.2e-6, against 1e-12 for the
+// exact path).
+constexpr double kNlgsStepResidual = 1e-5;
+
+TEST(StepResidual, NlgsAndTheExactPathSolveTheSameProbeStep) {
+  const Packing p = fixture("p50-mu0.1");
+  const ProbeSettings set = campaign_settings_for(p).nlgs;
+  const int contact = 1;
+  const CdStepProblem step = build_cd_step(p, contact, set);
+  const CdStepSolution exact = probe_cd_path(p, contact, set);
+  Eigen::VectorXd f_nlgs;
+  const ProbeResult nlgs = probe_nlgs(p, contact, set, f_nlgs);
+  ASSERT_TRUE(exact.result.converged);
+  ASSERT_TRUE(nlgs.converged);
+  ASSERT_EQ(f_nlgs.size(), 2 * step.num_contacts());
+  EXPECT_EQ(f_nlgs[2 * contact], nlgs.f_crit);
+
+  const StepResidual r_exact = step_residual(step, exact.f, set.g);
+  const StepResidual r_nlgs = step_residual(step, f_nlgs, set.g);
+  EXPECT_LE(r_exact.max(), kExactStepTolerance);
+  EXPECT_LE(r_nlgs.max(), kNlgsStepResidual);
+  EXPECT_EQ(cd_step_residual(step, exact.f).max(), r_exact.max()) << "cd_step_residual is step_residual in units of g";
+  EXPECT_NEAR(nlgs.f_crit / exact.result.f_crit, 1.0, 1e-5);
+
+  // A 1e-3 F0 change of the probed contact's normal force moves grains by ~1e-3 dt^2 / m,
+  // far above the solutions' residuals; a loaded contact's force outside the cone breaks
+  // Coulomb's law.
+  const double F0 = p.force_unit();
+  for (const Eigen::VectorXd* f : std::initializer_list<const Eigen::VectorXd*>{&exact.f, &f_nlgs}) {
+    Eigen::VectorXd bad = *f;
+    bad[2 * contact] += 1e-3 * F0;
+    EXPECT_GT(step_residual(step, bad, set.g).max(), 100.0 * kNlgsStepResidual);
+    bad = *f;
+    int loaded = -1;
+    for (int k = 0; k < step.num_contacts() && loaded < 0; ++k)
+      if (k != contact && bad[2 * k] > 0.1 * F0) loaded = k;
+    ASSERT_GE(loaded, 0);
+    bad[2 * loaded + 1] = p.meta.contact.mu * bad[2 * loaded] + 0.1 * F0;  // 0.1 F0 outside the cone
+    EXPECT_GT(step_residual(step, bad, set.g).coulomb, 0.05);
+  }
+}
+
+TEST(ContactProblem, EveryConsumerSeesTheSameTouchingContacts) {
+  // The fixture's contacts, with one pushed just beyond the touch gap, one exactly at it (the
+  // rule is gap < touch_gap: not touching) and one just inside, so that the classification has
+  // both answers near its boundary. Their forces stay, so the network stays admissible.
+  Packing p = fixture("p50-mu0.1");
+  const CampaignSettings cs = campaign_settings_for(p);
+  const double touch_gap = cs.nlgs.touch_gap;
+  ASSERT_GT(p.contacts.size(), 10u);
+  const int probed = 1;
+  p.contacts[3].gap = 2.0 * touch_gap;
+  p.contacts[5].gap = touch_gap;
+  p.contacts[7].gap = 0.5 * touch_gap;
+
+  const ContactProblem cp = own_problem(p);
+  ASSERT_EQ(cp.num_contacts(), static_cast<int>(p.contacts.size()));
+  std::vector<int> touching, admissible;
+  const double fn_tol_F0 = 1e-9;
+  for (int k = 0; k < cp.num_contacts(); ++k) {
+    EXPECT_EQ(cp.state[k].touching, p.contacts[k].gap < touch_gap) << "contact " << k;
+    EXPECT_EQ(cp.g_eff[k], cp.state[k].touching ? 0.0 : p.contacts[k].gap) << "contact " << k;
+    if (cp.state[k].touching) touching.push_back(k);
+    if (cp.state[k].touching || p.contacts[k].fn > fn_tol_F0 * cp.system.F0) admissible.push_back(k);
+  }
+  EXPECT_FALSE(cp.state[3].touching);
+  EXPECT_FALSE(cp.state[5].touching);
+  EXPECT_TRUE(cp.state[7].touching);
+
+  // The static solve's step (solver/static_solve) and the NLGS probe's step.
+  EXPECT_EQ(touching_gaps(p.contacts, touch_gap), std::vector<double>(cp.g_eff.data(), cp.g_eff.data() + cp.g_eff.size()));
+  const StepProblem nlgs = step_problem(cp);
+  ASSERT_EQ(nlgs.g_eff.size(), p.contacts.size());
+  for (int k = 0; k < cp.num_contacts(); ++k) EXPECT_EQ(nlgs.g_eff[k], cp.g_eff[k]) << "contact " << k;
+  EXPECT_EQ(nlgs.mu, cp.model.mu);
+  EXPECT_EQ(nlgs.bath.P_ext, cp.model.P_ext);
+  EXPECT_EQ(nlgs.bath.M_lambda, cp.model.M_lambda);
+
+  // The exact step (cd path, Lemke): the same problem, the probed contact shifted to -g.
+  const CdStepProblem cd = build_cd_step(p, probed, cs.nlgs);
+  for (int k = 0; k < cp.num_contacts(); ++k)
+    EXPECT_EQ(cd.g_eff[k], k == probed ? -cs.nlgs.g : cp.g_eff[k]) << "contact " << k;
+  EXPECT_EQ(cd.system.contacts, cp.system.contacts);
+  EXPECT_EQ(cd.inverse_mass, cp.inverse_mass);
+  EXPECT_EQ(cd.system.rhs, cp.system.rhs);
+
+  // The kinematic probe and the LP bounds: the admissible set is every touching or loaded
+  // contact, by the same rule (select_contacts); without the loaded ones, the touching set.
+  const KinematicProbe kinematic(p, cs.kinematic);
+  EXPECT_EQ(kinematic.system().contacts, admissible);
+  EXPECT_EQ(select_contacts(p, touch_gap, fn_tol_F0), admissible);
+  EXPECT_EQ(select_contacts(p, touch_gap, std::numeric_limits<double>::infinity()), touching);
+}
+
+TEST(ContactProblem, EnsembleAndProbeGiveTheSameNlgsCriticalForce) {
+  // `ensemble --probe nlgs` and `probe --method nlgs` probe with the packing's own contact
+  // model: the same F_crit, bit for bit, on every contact both probe. A loose velocity
+  // tolerance (both the same; each probe stops after its minimum of 100 sweeps) keeps the
+  // ensemble's 81 probes short: the bits still differ for any other touch gap, bath or P_ext.
+  const Packing p = fixture("p50-mu0.1");
+  EnsembleSettings in;
+  in.probe = "nlgs";
+  in.hit_and_run = in.walk = false;
+  in.threads = 2;
+  in.probe_velocity_tol = 1.0;
+  const EnsembleReport r = compute_ensemble(p, in);
+  CampaignSettings probe = campaign_settings_for(p);
+  probe.method = ProbeMethod::kNlgs;
+  probe.nlgs.velocity_tol = in.probe_velocity_tol;
+  int compared = 0;
+  for (int k = 0; k < r.system.num_contacts(); k += 10) {
+    if (!r.probes[k]) continue;
+    const int contact = r.system.contacts[k];
+    const ProbeResult one = probe_contact(p, probe, contact);
+    EXPECT_EQ(one.f_crit, r.probes[k]->f_crit) << "contact " << contact;
+    EXPECT_EQ(one.sweeps, r.probes[k]->sweeps) << "contact " << contact;
+    ++compared;
+  }
+  EXPECT_GE(compared, 5);
+}
+
+}  // namespace
+}  // namespace unjam
