@@ -1,8 +1,7 @@
 """Tests of scripts/experiment.py at --scale tiny (about 30 s).
 
 Run from the repository root:  /usr/bin/python3 -m unittest tests/test_experiment.py
-The unjam binary: $UNJAM (ctest sets it to the build's own), else build/release/unjam;
-skipped when it is missing.
+The unjam binary: tests/unjam_binary.py.
 """
 
 import csv
@@ -15,8 +14,10 @@ import sys
 import tempfile
 import unittest
 
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-UNJAM = os.path.abspath(os.environ.get("UNJAM") or os.path.join(REPO, "build", "release", "unjam"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+
 SCRIPT = os.path.join(REPO, "scripts", "experiment.py")
 
 STAGE_LINE = re.compile(r"^\[(\d+)/(\d+)\] (.+?): .* \.\.\. (running|done in [\d.]+ s|"
@@ -41,8 +42,7 @@ def outcomes(stdout):
     return res
 
 
-@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
-                     f"{UNJAM} is missing: build it first (cmake --build build/release -j2)")
+@requires_unjam
 class ExperimentTiny(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -250,8 +250,7 @@ class ExperimentTiny(unittest.TestCase):
         self.assertIn("| 1 | 100 | 1 | 3 | 0 | ", report)
 
 
-@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
-                     f"{UNJAM} is missing")
+@requires_unjam
 class ExperimentArguments(unittest.TestCase):
     """Bad overrides are refused up front (a usage error, exit 2), before any stage runs."""
 

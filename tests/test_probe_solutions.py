@@ -1,8 +1,7 @@
 """Tests of scripts/probe_solutions.py on the fixture p50-mu1 (about 5 s).
 
 Run from the repository root:  /usr/bin/python3 -m unittest tests/test_probe_solutions.py
-The unjam binary: $UNJAM (ctest sets it to the build's own), else build/release/unjam;
-skipped when it is missing.
+The unjam binary: tests/unjam_binary.py.
 """
 
 import csv
@@ -14,8 +13,10 @@ import sys
 import tempfile
 import unittest
 
-REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-UNJAM = os.path.abspath(os.environ.get("UNJAM") or os.path.join(REPO, "build", "release", "unjam"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+
 SCRIPT = os.path.join(REPO, "scripts", "probe_solutions.py")
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 
@@ -34,34 +35,42 @@ def run(*args):
                           cwd=REPO, timeout=300)
 
 
-@unittest.skipUnless(os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
-                     f"{UNJAM} is missing: build it first (cmake --build build/release -j2)")
-class ProbeSolutions(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls):
-        cls.tmp = tempfile.mkdtemp(prefix="unjam-solutions-")
-        cls.packing = os.path.join(cls.tmp, "p50-mu1")
-        shutil.copytree(os.path.join(FIXTURES, "p50-mu1"), cls.packing)
-        cls.out = os.path.join(cls.tmp, "solutions")
-        cls.args = [cls.packing, "--all", "--starts", "static", "compliant", "lp", "--threads", "1",
-                    "--unjam", UNJAM, "--out", cls.out]
-        p = run(*cls.args)
-        if p.returncode != 0:
-            raise AssertionError(f"probe_solutions.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
-        with open(os.path.join(cls.out, "solutions.csv"), newline="") as f:
-            cls.rows = {int(r["contact"]): r for r in csv.DictReader(f)}
-        with open(os.path.join(cls.out, "solutions.json")) as f:
-            cls.summary = json.load(f)
+R = {}  # the run shared by the tests: its directory, arguments, rows and summary
 
-    @classmethod
-    def tearDownClass(cls):
-        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+def setUpModule():
+    if not (os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK)):
+        return
+    tmp = R["tmp"] = tempfile.mkdtemp(prefix="unjam-solutions-")
+    packing = os.path.join(tmp, "p50-mu1")
+    shutil.copytree(os.path.join(FIXTURES, "p50-mu1"), packing)
+    out = R["out"] = os.path.join(tmp, "solutions")
+    R["packing"] = packing
+    R["args"] = [packing, "--all", "--starts", "static", "compliant", "lp", "--threads", "1",
+                 "--unjam", UNJAM, "--out", out]
+    p = run(*R["args"])
+    if p.returncode != 0:
+        raise AssertionError(f"probe_solutions.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
+    with open(os.path.join(out, "solutions.csv"), newline="") as f:
+        R["rows"] = {int(r["contact"]): r for r in csv.DictReader(f)}
+    with open(os.path.join(out, "solutions.json")) as f:
+        R["summary"] = json.load(f)
+
+
+def tearDownModule():
+    if "tmp" in R:
+        shutil.rmtree(R["tmp"], ignore_errors=True)
+
+
+@requires_unjam
+class ProbeSolutions(unittest.TestCase):
+    """The three starts on every force-carrying contact of p50-mu1 (one run, setUpModule)."""
 
     def test_1_the_reference_contacts(self):
         # Contacts 5 and 6 have two exact solutions (the independent solver's two): the lp
         # start finds the other one; contacts 1 and 2 have one, which every start finds.
         for k, (f_static, f_other) in reference().items():
-            r = self.rows[k]
+            r = R['rows'][k]
             self.assertEqual(int(r["exact_starts"]), 3, k)
             self.assertAlmostEqual(float(r["f_crit_static"]) / f_static, 1.0, delta=1e-6)
             if f_other is None:
@@ -72,9 +81,9 @@ class ProbeSolutions(unittest.TestCase):
                 self.assertAlmostEqual(float(r["f_crit_max"]) / f_static, 1.0, delta=1e-6)
 
     def test_2_counts_agree_with_the_rows(self):
-        rows = self.rows.values()
-        s = self.summary
-        self.assertEqual(s["probes"], len(self.rows))
+        rows = R['rows'].values()
+        s = R['summary']
+        self.assertEqual(s["probes"], len(R['rows']))
         self.assertEqual(s["probes"], 56)  # the force-carrying contacts of p50-mu1
         for start in ("static", "compliant", "lp"):
             self.assertEqual(s["exact"][start],
@@ -89,17 +98,17 @@ class ProbeSolutions(unittest.TestCase):
 
     def test_3_rerun_gives_the_same_bytes(self):
         # The probe runs are complete: unjam resumes them without probing again.
-        with open(os.path.join(self.out, "solutions.csv"), "rb") as f:
+        with open(os.path.join(R['out'], "solutions.csv"), "rb") as f:
             before = f.read()
-        p = run(*self.args)
+        p = run(*R['args'])
         self.assertEqual(p.returncode, 0, p.stderr)
-        with open(os.path.join(self.out, "solutions.csv"), "rb") as f:
+        with open(os.path.join(R['out'], "solutions.csv"), "rb") as f:
             self.assertEqual(f.read(), before)
 
     def test_4_bad_input_is_refused(self):
-        for args, message in (([self.tmp, "--all"], "not a packing directory"),
-                              ([self.packing, "--sample", "0", "--unjam", UNJAM], "--sample must be at least 1"),
-                              ([self.packing, "--all", "--starts", "static", "static", "--unjam", UNJAM],
+        for args, message in (([R['tmp'], "--all"], "not a packing directory"),
+                              ([R['packing'], "--sample", "0", "--unjam", UNJAM], "--sample must be at least 1"),
+                              ([R['packing'], "--all", "--starts", "static", "static", "--unjam", UNJAM],
                                "lists a start twice")):
             p = run(*args)
             self.assertEqual(p.returncode, 2, args)
