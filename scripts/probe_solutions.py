@@ -10,10 +10,11 @@ probe can have several exact solutions (docs/probe.md, "Where the path starts").
 DIR/START; an interrupted run resumes there), and writes per contact:
 
   DIR/solutions.csv   contact, f_cont, then f_crit_START and residual_START for every start,
-                      exact_starts (starts whose residual is at most 1e-6 g), solutions (the
-                      number of distinct exact F_crit: two differ when their relative
-                      difference exceeds --rel-tol), f_crit_min, f_crit_max (over the exact
-                      ones; empty where no start is exact)
+                      exact_starts (starts whose probe is exact: `converged` in probes.csv,
+                      residual at most 1e-6 g, docs/probe.md), solutions (the number of
+                      distinct exact F_crit: two differ when their relative difference
+                      exceeds --rel-tol), f_crit_min, f_crit_max (over the exact ones; empty
+                      where no start is exact)
   DIR/solutions.json  the counts (probes, exact per start, probes with two solutions or more),
                       the packing, the starts, the command and the program's version
 
@@ -36,7 +37,6 @@ from experiment_stages import write_table  # noqa: E402
 from stage_runner import read_json, write_json  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-EXACT = 1e-6  # kExactStepTolerance: residual of an exact step, in g (docs/probe.md)
 STARTS = ("static", "compliant", "lp")
 
 
@@ -112,7 +112,7 @@ def main(argv):
         for s in a.starts:
             r = runs[s][k]
             row[f"f_crit_{s}"], row[f"residual_{s}"] = r["f_crit"], r["residual"]
-            if float(r["residual"]) <= EXACT:
+            if r["converged"] == "1":  # the step solved exactly (unjam's own verdict)
                 exact.append(float(r["f_crit"]))
                 exact_per_start[s] += 1
         n = distinct(exact, a.rel_tol)
@@ -126,7 +126,7 @@ def main(argv):
     first = read_json(os.path.join(a.out, a.starts[0], "probe_summary.json")) or {}
     summary = {
         "packing": os.path.abspath(a.packing), "N": first.get("N"), "mu": first.get("mu"),
-        "starts": a.starts, "rel_tol": a.rel_tol, "exact_residual_g": EXACT,
+        "starts": a.starts, "rel_tol": a.rel_tol,
         "probes": len(rows), "exact": exact_per_start,
         "with_two_solutions_or_more": several,
         "program_version": first.get("program_version"),

@@ -131,10 +131,9 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
-  std::printf("contact %d (grains %d-%d), method %s%s\n", r.contact, r.a, r.b, o.method.c_str(),
-              s.cd.start == CdPathStart::lp_optimum  ? ", path from the lp optimum"
-              : s.cd.start == CdPathStart::compliant ? ", compliant continuation"
-                                                      : "");
+  std::printf("contact %d (grains %d-%d), method %s%s%s\n", r.contact, r.a, r.b, o.method.c_str(),
+              s.cd.start == CdPathStart::static_network ? "" : ", cd start ",
+              s.cd.start == CdPathStart::static_network ? "" : cd_start_name(s.cd.start));
   std::printf("  F_cont / F0 %.6f   F_crit / F0 %.6f   F_crit / F_cont %.4f\n", r.f_cont / F0,
               r.f_crit / F0, r.f_crit / r.f_cont);
   std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",

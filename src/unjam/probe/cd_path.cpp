@@ -648,24 +648,22 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   sol.f = path.forces(x0 + x1);
   sol.residual = cd_step_residual(pb, sol.f);
   std::vector<State> states = path.states();  // those of sol.f
-  Eigen::VectorXd f_latest = sol.f;
-  const double kappa_rigid = rigid * pb.g / (dt2 * F0);
-  // A lowering whose proximal path fails (a cycle at a degenerate point) is taken again
-  // from the latest solution with the factor's square root (a smaller step), up to
-  // kMaxLoweringRetries times in a row.
-  constexpr int kMaxLoweringRetries = 4;
-  double factor = ps.compliance_factor;
-  int failed = 0;
-  StepPath::Held held = path.held();
-  for (int r = 0; sol.residual.max() > 1e-3 * kExactStepTolerance; ++r) {
-    const bool lowering = path.compliance() > kappa_rigid * (1.0 + 1e-12);
-    if (!lowering && r >= stats.lowerings + failed + ps.refinements) break;
-    if (lowering) {
-      path.set_compliance(std::max(kappa_rigid, factor * path.compliance()), f_latest);
-      ++stats.lowerings;
-    }
+  Eigen::VectorXd f_latest = sol.f;  // the latest solution (the next proximal step's reference)
+  const auto exact_enough = [&] { return sol.residual.max() <= 1e-3 * kExactStepTolerance; };
+  // Keeps forces f (the path's present solution) where they lower the residual.
+  const auto keep_if_better = [&](const Eigen::VectorXd& f) {
+    const CdStepResidual res = cd_step_residual(pb, f);
+    if (!(res.max() < sol.residual.max())) return false;
+    sol.f = f;
+    sol.residual = res;
+    states = path.states();
+    return true;
+  };
+  // One proximal path from f_latest at the present compliance; false (and why in `failure`)
+  // where it does not reach its end.
+  std::string failure;
+  const auto proximal_path = [&] {
     path.proximal_step(f_latest);
-    if (lowering && !path.factorize()) break;
     path.solve(x0, x1);
     path.displacements(x0, x1);
     ++stats.refinements;
@@ -673,10 +671,31 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     const bool reached = follow_path(path, pb, ps, x0, x1, proximal);
     stats.pieces += proximal.pieces;
     stats.degenerate += proximal.degenerate;
-    if (!reached) {
-      if (!lowering) break;
+    failure = proximal.failure;
+    return reached;
+  };
+
+  // The compliance lowered to `rigid` (CdPathStart::compliant; nothing to do otherwise). A
+  // lowering whose proximal path fails (a cycle at a degenerate point) is taken again from
+  // the latest solution with the factor's square root (a smaller step), up to
+  // kMaxLoweringRetries times in a row.
+  constexpr int kMaxLoweringRetries = 4;
+  const double kappa_rigid = rigid * pb.g / (dt2 * F0);
+  double factor = ps.compliance_factor;
+  int failed = 0;
+  bool given_up = false;
+  StepPath::Held held = path.held();
+  while (!exact_enough() && path.compliance() > kappa_rigid * (1.0 + 1e-12)) {
+    path.set_compliance(std::max(kappa_rigid, factor * path.compliance()), f_latest);
+    ++stats.lowerings;
+    if (!path.factorize()) {
+      given_up = true;
+      break;
+    }
+    if (!proximal_path()) {
       if (++failed > kMaxLoweringRetries) {
-        stats.failure = proximal.failure;
+        stats.failure = failure;
+        given_up = true;
         break;
       }
       path.restore(held);
@@ -687,14 +706,13 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     held = path.held();
     failed = 0;
     factor = ps.compliance_factor;
-    const CdStepResidual res = cd_step_residual(pb, f_latest);
-    if (!(res.max() < sol.residual.max())) {
-      if (lowering) continue;
-      break;
-    }
-    sol.f = f_latest;
-    sol.residual = res;
-    states = path.states();
+    keep_if_better(f_latest);
+  }
+  // At the rigid compliance: proximal steps while they lower the residual.
+  for (int r = 0; !given_up && r < ps.refinements && !exact_enough(); ++r) {
+    if (!proximal_path()) break;
+    f_latest = path.forces(x0 + x1);
+    if (!keep_if_better(f_latest)) break;
   }
   stats.factorizations += path.factorizations();
   for (int k = 0; k < nc; ++k) {
@@ -753,17 +771,17 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   const bool soft = ps.start == CdPathStart::compliant && ps.compliant_start > ps.compliance;
   CdStepSolution best;
   CdPathStats best_stats;
+  const double f = ps.compliance_factor;
+  const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
+  const double factors[] = {f, f * f, std::sqrt(f)};
   for (int attempt = 0; attempt < 3; ++attempt) {
     if (attempt > 0 && !ps.retry) break;
     CdPathStats stats;
     CdPathSettings at = ps;
-    if (soft) {
-      at.compliance_factor = attempt == 0 ? ps.compliance_factor
-                             : attempt == 1 ? ps.compliance_factor * ps.compliance_factor
-                                            : std::sqrt(ps.compliance_factor);
-    } else {
-      at.compliance = ps.compliance * (attempt == 0 ? 1.0 : attempt == 1 ? 10.0 : 0.1);
-    }
+    if (soft)
+      at.compliance_factor = factors[attempt];
+    else
+      at.compliance = compliances[attempt];
     CdStepSolution sol = follow(pb, packing, at, guess, soft ? ps.compliant_start : at.compliance,
                                 at.compliance, stats);
     stats.attempts = best_stats.attempts + 1;
