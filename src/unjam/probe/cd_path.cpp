@@ -536,19 +536,29 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
   // there, as the dynamics from rest would pass them by).
   double lambda = 0.0, sigma = 1.0;
   std::unordered_set<std::size_t> visited;
+  const std::size_t start_key = state_key(path.states(), sigma);
+  stats.lambda_max = 0.0;
   while (true) {
     const Event e = path.next_event(x0, x1, lambda, sigma);
     if (e.contact < 0 && sigma < 0.0) {  // a ray: no solution on this path
       stats.failure = "ray";
       return false;
     }
-    if (e.contact < 0 || (sigma > 0.0 && e.lambda >= 1.0)) return true;
-    // A path through a degenerate point (several conditions tight at once) can come back
-    // to a state set it has left: the pivoting cycles, and the probe has no solution here.
-    if (++stats.pieces > max_pieces || !visited.insert(state_key(path.states(), sigma)).second) {
-      stats.failure = stats.pieces > max_pieces ? "pieces" : "cycle";
+    if (e.contact < 0 || (sigma > 0.0 && e.lambda >= 1.0)) {
+      stats.lambda_max = 1.0;
+      return true;
+    }
+    // The path comes back to a state set it has left. Where that is the start's, with the
+    // start's direction, the branch of solutions through the start is a closed curve: it
+    // turns back at a fold below lambda = 1 (stats.lambda_max) and returns through lambda < 0
+    // to the start from the other side ("loop"; docs/probe.md, "Why a path fails"). Elsewhere
+    // the pivoting cycles at a degenerate point, several conditions tight at one lambda.
+    const std::size_t key = state_key(path.states(), sigma);
+    if (++stats.pieces > max_pieces || !visited.insert(key).second) {
+      stats.failure = stats.pieces > max_pieces ? "pieces" : key == start_key ? "loop" : "cycle";
       return false;
     }
+    stats.lambda_max = std::max(stats.lambda_max, e.lambda);
     if (e.lambda == lambda) ++stats.degenerate;
     lambda = e.lambda;
     const State previous = path.states()[e.contact];

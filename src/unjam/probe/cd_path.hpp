@@ -14,7 +14,11 @@
 // ends where the first contact would break its state's inequalities (a force leaves the
 // cone or turns tensile, a slip reverses, an open pair closes), that contact changes state
 // and the path goes on. This is a parametric principal pivoting method; it reaches the
-// solution connected to the static network, the one a step started from rest follows.
+// solution connected to the static network, the one a step started from rest follows, where
+// that branch reaches the full opening. With friction the branch can instead be a closed
+// curve: it turns back at a fold at lambda_max < 1 and returns to the static network through
+// lambda < 0 (a "loop", docs/probe.md, "Why a path fails"); the step then has no solution
+// connected to the static network.
 //
 // A hyperstatic set of sticking contacts leaves forces undetermined; the path therefore
 // carries a small compliance kappa (u + kappa dt^2 (f - f_ref) = 0 on closed contacts,
@@ -70,8 +74,10 @@ struct CdPathStats {
   int factorizations = 0;     // of the reduced system (the others are updates of its factors)
   int attempts = 0;           // paths followed (1 + retries)
   int open = 0, sliding = 0;  // final states (the probed contact not counted as open)
-  std::string failure;        // why there is no solution: "ray", "cycle", "pieces",
-                              // "singular", "inexact" (residual above kMaxPathResidual)
+  double lambda_max = 0.0;    // the largest lambda the first path reached (1: its end)
+  std::string failure;        // why there is no solution: "loop" (the branch through the
+                              // start is closed), "cycle" (at a degenerate point), "ray",
+                              // "pieces", "singular", "inexact" (residual above kMaxPathResidual)
 };
 
 // Forces whose residual (g, F0) exceeds this are no solution; between kExactStepTolerance
@@ -89,9 +95,9 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& step, 
 
 // Solves the step of probing packing.contacts[contact] (settings.g, dt, touch_gap, bath).
 // result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.
-// A path that exceeds max_pieces, comes back to a state set it left (cycling at a degenerate
-// point), ends on a ray or returns forces with a residual above kMaxPathResidual returns
-// residual kNoSolution.
+// A path that exceeds max_pieces, comes back to a state set it left (its start's: a closed
+// branch; another: cycling at a degenerate point), ends on a ray or returns forces with a
+// residual above kMaxPathResidual returns residual kNoSolution.
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& path = {}, CdPathStats* stats = nullptr);
 
