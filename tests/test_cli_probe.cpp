@@ -151,4 +151,21 @@ TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutio
 }
 
 }  // namespace
+TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {
+  // Contact 49 of p200-mu1: the branch of the step through the static network turns back at
+  // ~2.3e-5 of the opening and closes on itself, at every compliance tried (docs/probe.md,
+  // "Why a path fails"). The single probe says so, exits 1 and names the other selection,
+  // which solves it.
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  const fs::path out = root_ / "loop";
+  fs::create_directories(out);
+  testing::ToolRun r = run_tool("probe " + q(p200) + " --contact 49 --method cd --threads 1 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("through the static network closes on itself, turning back at 2.29e-05 of the opening"),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--cd-start compliant"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(p200) + " --contact 49 --method cd --cd-start compliant --threads 1 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 }  // namespace unjam

@@ -95,23 +95,40 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
 // The exact step also writes its contact forces (probe-K-forces.csv), so that the solution
 // can be checked by anyone.
 ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s, int contact,
-                                    const fs::path& out) {
+                                    const fs::path& out, CdPathStats& stats) {
   const CdStepSolution sol = s.method == ProbeMethod::kLemke ? probe_cd_lemke(p, contact, s.nlgs)
-                                                             : probe_cd_path(p, contact, s.nlgs, s.cd);
+                                                             : probe_cd_path(p, contact, s.nlgs, s.cd, &stats);
   if (sol.f.size() > 0)
     write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
                       step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
   return sol.result;
 }
 
+// Why the cd path found no solution, where it knows (stats of its first attempt).
+std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
+  char hint[320];
+  if (stats.failure == "loop" && stats.lambda_max < 1.0) {
+    std::snprintf(hint, sizeof hint,
+                  "the branch of solutions through the %s closes on itself, turning back at %.3g of the "
+                  "opening: no solution is connected to it (--cd-start compliant takes the rigid limit of stiff "
+                  "contacts instead); docs/probe.md, \"Why a path fails\"",
+                  start == CdPathStart::lp_optimum ? "lp optimum" : "static network", stats.lambda_max);
+  } else if (stats.failure == "loop" || stats.failure == "cycle") {
+    std::snprintf(hint, sizeof hint, "a path at the full opening %s; docs/probe.md, \"Why a path fails\"",
+                  stats.failure == "loop" ? "closes on itself" : "cycles at a degenerate point");
+  } else {
+    std::snprintf(hint, sizeof hint, "the path found none within %g g%s%s; docs/probe.md, \"What limits it\"",
+                  kExactStepTolerance, stats.failure.empty() ? "" : ": ", stats.failure.c_str());
+  }
+  return hint;
+}
+
 // Why a single probe is not a solution, and what the user can do about it.
-std::string not_converged_message(const ProbeResult& r, const std::string& method) {
-  char residual[64], cd_hint[128];
+std::string not_converged_message(const ProbeResult& r, const std::string& method, const std::string& cd_hint) {
+  char residual[64];
   std::snprintf(residual, sizeof residual, "residual %.3g g", r.residual);
-  std::snprintf(cd_hint, sizeof cd_hint, "the path found none within %g g; docs/probe.md, \"What limits it\"",
-                kExactStepTolerance);
   const std::string hint = method == "nlgs"    ? "raise --max-sweeps"
-                           : method == "cd"    ? std::string(cd_hint)
+                           : method == "cd"    ? cd_hint
                            : method == "lemke" ? "Lemke's path ended on a ray"
                                                : "docs/probe.md";
   return "the probe of contact " + std::to_string(r.contact) + " did not converge (method " + method + ", " +
@@ -127,7 +144,8 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   }
   const auto t0 = std::chrono::steady_clock::now();
   const bool exact = s.method == ProbeMethod::kLemke || s.method == ProbeMethod::kCd;
-  const ProbeResult r = exact ? probe_exact_with_forces(p, s, o.contact, out) : probe_contact(p, s, o.contact);
+  CdPathStats stats;
+  const ProbeResult r = exact ? probe_exact_with_forces(p, s, o.contact, out, stats) : probe_contact(p, s, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
@@ -140,7 +158,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
-  if (!r.converged) throw Error(not_converged_message(r, o.method));
+  if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd.start)));
 }
 
 std::optional<FitWindow> fit_window(const ProbeOptions& o) {
