@@ -5,12 +5,17 @@
 
 #include <initializer_list>
 #include <limits>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "unjam/campaign/ensemble_run.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
@@ -29,7 +34,7 @@ Packing fixture(const std::string& name) {
 // The packing's own contact problem, as `unjam probe` builds it (campaign_settings_for).
 ContactProblem own_problem(const Packing& p) {
   const ProbeSettings s = campaign_settings_for(p).nlgs;
-  return build_contact_problem(p, packing_contact_model(p, s.bath.M_lambda, s.touch_gap), s.dt);
+  return build_contact_problem(p, contact_model_of(p, s.model), s.dt);
 }
 
 // An NLGS solution, converged on velocity changes of 1e-6 g / dt, leaves a residual of this
@@ -81,7 +86,7 @@ TEST(ContactProblem, EveryConsumerSeesTheSameTouchingContacts) {
   // both answers near its boundary. Their forces stay, so the network stays admissible.
   Packing p = fixture("p50-mu0.1");
   const CampaignSettings cs = campaign_settings_for(p);
-  const double touch_gap = cs.nlgs.touch_gap;
+  const double touch_gap = cs.nlgs.model->touch_gap;
   ASSERT_GT(p.contacts.size(), 10u);
   const int probed = 1;
   p.contacts[3].gap = 2.0 * touch_gap;
@@ -125,6 +130,65 @@ TEST(ContactProblem, EveryConsumerSeesTheSameTouchingContacts) {
   EXPECT_EQ(kinematic.system().contacts, admissible);
   EXPECT_EQ(select_contacts(p, touch_gap, fn_tol_F0), admissible);
   EXPECT_EQ(select_contacts(p, touch_gap, std::numeric_limits<double>::infinity()), touching);
+}
+
+TEST(ContactProblem, ProbeSettingsCarryThePackingsContactModel) {
+  // Every field of meta.contact away from its default (mu = 1 is the fixture's), so that a
+  // field taken from anywhere else shows.
+  Packing p = fixture("p50-mu1");
+  p.meta.contact = {1.0, 1.5, 0.25, 3e-6};
+  const CampaignSettings cs = campaign_settings_for(p);
+  ASSERT_TRUE(cs.nlgs.model && cs.kinematic.model);
+  EXPECT_EQ(*cs.nlgs.model, p.meta.contact);
+  EXPECT_EQ(*cs.kinematic.model, p.meta.contact);
+  EXPECT_EQ(contact_model_of(p, std::nullopt), p.meta.contact);
+
+  // The summary records the method's model; settings without one are refused.
+  for (const ProbeMethod method : {ProbeMethod::kLp, ProbeMethod::kCd, ProbeMethod::kNlgs}) {
+    CampaignSettings s = cs;
+    s.method = method;
+    const nlohmann::json j = to_json(s);
+    EXPECT_EQ(j.at("touch_gap").get<double>(), 3e-6);
+    EXPECT_EQ(j.at("M_lambda").get<double>(), 0.25);
+    s.nlgs.model.reset();
+    s.kinematic.model.reset();
+    EXPECT_THROW(to_json(s), Error);
+  }
+
+  // The exact step and the fast probe are built from that model: its mu, F0 = 2 R_avg P_ext,
+  // pressure row 2 V P_ext and cell mass 2 V M_lambda.
+  const CdStepProblem step = build_cd_step(p, 1, cs.nlgs);
+  EXPECT_EQ(step.model, p.meta.contact);
+  const KinematicProbe kinematic(p, cs.kinematic);
+  const EquilibriumSystem& sys = kinematic.system();
+  const double V = p.cell.area();
+  EXPECT_EQ(sys.mu, 1.0);
+  EXPECT_EQ(sys.F0, 2.0 * p.mean_radius() * 1.5);
+  EXPECT_EQ(sys.rhs[sys.pressure_row()], 2.0 * V * 1.5);
+  EXPECT_EQ(step.inverse_mass[step.system.pressure_row()], 1.0 / (2.0 * V * 0.25));
+  EXPECT_EQ(inverse_masses(p, sys, p.meta.contact)[sys.pressure_row()], 1.0 / (2.0 * V * 0.25));
+}
+
+TEST(ContactProblem, TheLpProbesAdmissibleSetIsTheModelsTouchingContacts) {
+  // p50-mu1 (80 contacts, counted from contacts.csv): 56 have gap < 1e-6 (its touch gap), all
+  // of them loaded; the other 24 carry no force, 15 of them with gap < 1e-3.
+  const Packing p = fixture("p50-mu1");
+  ASSERT_EQ(p.contacts.size(), 80u);
+  const ContactModel own = campaign_settings_for(p).kinematic.model.value();
+  for (const auto& [touch_gap, expected] : {std::pair{own.touch_gap, 56}, std::pair{1e-3, 71}}) {
+    const ContactModel model = with_touch_gap(own, touch_gap);
+    std::vector<int> touching;
+    for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k)
+      if (classify_contact(p.contacts[k], model.touch_gap, 0.0).touching) touching.push_back(k);
+    KinematicProbeSettings ks;
+    ks.model = model;
+    const KinematicProbe kinematic(p, ks);
+    EXPECT_EQ(kinematic.system().num_contacts(), expected) << "touch_gap " << touch_gap;
+    EXPECT_EQ(kinematic.system().contacts, touching) << "touch_gap " << touch_gap;
+    EXPECT_EQ(admissible_system(p, model).contacts, touching) << "touch_gap " << touch_gap;
+  }
+  // Without a model the probe takes the packing's own.
+  EXPECT_EQ(KinematicProbe(p, {}).system().num_contacts(), 56);
 }
 
 TEST(ContactProblem, EnsembleAndProbeGiveTheSameNlgsCriticalForce) {

@@ -80,12 +80,12 @@ TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
   for (const char* method : {"nlgs", "lp"}) {
     const CampaignSettings s = ensemble_probe_settings(p, in, method);
     EXPECT_EQ(s.method, std::string(method) == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs);
-    EXPECT_EQ(s.nlgs.bath.M_lambda, 0.5);
-    EXPECT_EQ(s.kinematic.M_lambda, 0.5);
-    EXPECT_EQ(s.nlgs.touch_gap, 2e-6);
-    EXPECT_EQ(s.kinematic.touch_gap, 2e-6);
-    EXPECT_EQ(s.nlgs.bath.M_lambda, probe.nlgs.bath.M_lambda);
-    EXPECT_EQ(s.nlgs.touch_gap, probe.nlgs.touch_gap);
+    EXPECT_EQ(s.nlgs.model->M_lambda, 0.5);
+    EXPECT_EQ(s.kinematic.model->M_lambda, 0.5);
+    EXPECT_EQ(s.nlgs.model->touch_gap, 2e-6);
+    EXPECT_EQ(s.kinematic.model->touch_gap, 2e-6);
+    EXPECT_EQ(s.nlgs.model, probe.nlgs.model);
+    EXPECT_EQ(s.kinematic.model, probe.kinematic.model);
     EXPECT_EQ(s.nlgs.g, 2e-9);
     EXPECT_EQ(s.kinematic.g, 2e-9);
     EXPECT_EQ(s.nlgs.dt, 2e-3);

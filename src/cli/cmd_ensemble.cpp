@@ -180,7 +180,7 @@ void run_ensemble(const EnsembleOptions& opt) {
   std::optional<CsvWriter> samples_csv;  // --write-samples: fn of every hit-and-run sample
   if (opt.write_samples) {
     std::vector<std::string> names;
-    for (const int c : select_contacts(packing, s.gap_tol, s.fn_tol))
+    for (const int c : select_contacts(packing, ensemble_contact_model(packing, s), s.fn_tol))
       names.push_back("fn_" + std::to_string(packing.contacts[c].a) + "_" + std::to_string(packing.contacts[c].b));
     samples_csv.emplace(names);
     s.on_sample = [&samples_csv](const ForceNetwork& net) {

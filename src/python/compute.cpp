@@ -14,6 +14,7 @@
 
 #include "python/bindings.hpp"
 #include "unjam/analysis/packing_stats.hpp"
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -167,7 +168,7 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     py::gil_scoped_release release;
     const ThreadCount count(threads);
     lp.threads = omp_get_max_threads();
-    sys = build_equilibrium_system(p, select_contacts(p, gap_tol, fn_tol));
+    sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
     rank = equilibrium_rank(*sys);
     b = compute_force_bounds(*sys, lp);  // incomplete if should_stop stopped it
   } catch (const Error&) {

@@ -78,6 +78,10 @@ double quantile(std::vector<double> x, double q) {
   return x[i] + (pos - i) * (x[i + 1] - x[i]);
 }
 
+ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettings& in) {
+  return with_touch_gap(packing.meta.contact, in.gap_tol);
+}
+
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& in,
                                          const std::string& method) {
   CampaignSettings s = campaign_settings_for(packing);
@@ -90,7 +94,7 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
 
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {
   EnsembleReport r;
-  r.system = build_equilibrium_system(packing, select_contacts(packing, in.gap_tol, in.fn_tol));
+  r.system = admissible_system(packing, ensemble_contact_model(packing, in), in.fn_tol);
   const EquilibriumSystem& sys = r.system;
   r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "nlgs" : "lp";
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();

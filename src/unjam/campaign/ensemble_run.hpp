@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/ensemble/hit_and_run.hpp"
@@ -61,6 +62,11 @@ struct EnsembleReport {
   int unconverged = 0;                // probes that did not converge
   double probe_seconds = 0.0;
 };
+
+// The model that selects the ensemble's admissible set: the packing's own (meta.contact) with
+// touch_gap = settings.gap_tol. The set is admissible_system(packing, this model,
+// settings.fn_tol) (contact/contact_problem.hpp).
+ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettings& settings);
 
 // Every part of the ensemble of `packing` with `settings`. Throws unjam::Error as the
 // samplers and probes do (the probes' errors name the contact).

@@ -36,6 +36,40 @@ ContactModel packing_contact_model(const Packing& packing, double M_lambda, doub
   return model;
 }
 
+ContactModel contact_model_of(const Packing& packing, const std::optional<ContactModel>& model) {
+  return model ? *model : packing.meta.contact;
+}
+
+namespace {
+
+// The balance rows of `contacts` with mu, F0 and P_ext of `model`.
+EquilibriumSystem model_system(const Packing& packing, const std::vector<int>& contacts,
+                               const ContactModel& model) {
+  EquilibriumSystem sys = build_equilibrium_system(packing, contacts);
+  sys.mu = model.mu;
+  sys.F0 = force_unit(packing.mean_radius(), model.P_ext);
+  sys.rhs[sys.pressure_row()] = 2.0 * packing.cell.area() * model.P_ext;
+  return sys;
+}
+
+}  // namespace
+
+EquilibriumSystem admissible_system(const Packing& packing, const ContactModel& model, double fn_tol) {
+  return model_system(packing, select_contacts(packing, model, fn_tol), model);
+}
+
+Eigen::VectorXd inverse_masses(const Packing& packing, const EquilibriumSystem& system,
+                               const ContactModel& model) {
+  Eigen::VectorXd inverse_mass(system.A.rows());
+  for (std::size_t i = 0; i < system.grains.size(); ++i) {
+    const double m = packing.particles.mass(system.grains[i]);
+    inverse_mass[3 * i] = inverse_mass[3 * i + 1] = 1.0 / m;
+    inverse_mass[3 * i + 2] = 2.0 / m;  // coordinate R theta: mass I / R^2 = m / 2
+  }
+  inverse_mass[system.pressure_row()] = 1.0 / (2.0 * packing.cell.area() * model.M_lambda);
+  return inverse_mass;
+}
+
 ContactProblem build_contact_problem(const Packing& packing, const ContactModel& model, double dt) {
   const int nc = static_cast<int>(packing.contacts.size());
   ContactProblem pb;
@@ -44,17 +78,8 @@ ContactProblem build_contact_problem(const Packing& packing, const ContactModel&
   pb.dt = dt;
   std::vector<int> all(nc);
   std::iota(all.begin(), all.end(), 0);
-  pb.system = build_equilibrium_system(packing, all);
-  pb.system.mu = model.mu;
-  pb.system.F0 = force_unit(packing.mean_radius(), model.P_ext);
-  pb.system.rhs[pb.system.pressure_row()] = 2.0 * packing.cell.area() * model.P_ext;
-  pb.inverse_mass.resize(pb.system.A.rows());
-  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
-    const double m = packing.particles.mass(pb.system.grains[i]);
-    pb.inverse_mass[3 * i] = pb.inverse_mass[3 * i + 1] = 1.0 / m;
-    pb.inverse_mass[3 * i + 2] = 2.0 / m;  // coordinate R theta: mass I / R^2 = m / 2
-  }
-  pb.inverse_mass[pb.system.pressure_row()] = 1.0 / (2.0 * packing.cell.area() * model.M_lambda);
+  pb.system = model_system(packing, all, model);
+  pb.inverse_mass = inverse_masses(packing, pb.system, model);
   pb.g_eff.resize(nc);
   pb.state.resize(nc);
   for (int k = 0; k < nc; ++k) {

@@ -18,6 +18,7 @@
 //     W = A^T M^-1 A,   q_loc = -A^T M^-1 b + g_eff / dt^2,   U = u / dt^2.
 // A probe shifts one contact's g_eff to -g (probe/cd_step); the static network f0 solves the
 // unshifted problem (A f0 = b gives u = 0).
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -55,6 +56,24 @@ ContactProblem build_contact_problem(const Packing& packing, const ContactModel&
 // The packing's own contact model: mu and P_ext of its metadata, M_lambda and touch_gap as
 // given (the settings it was made with).
 ContactModel packing_contact_model(const Packing& packing, double M_lambda, double touch_gap);
+
+// The model a consumer's settings name: `model` if set, else the packing's own
+// (packing.meta.contact).
+ContactModel contact_model_of(const Packing& packing, const std::optional<ContactModel>& model);
+
+// The admissible set of `packing` under `model` (docs/ensemble.md, "The admissible force
+// networks"): the balance rows of the contacts select_contacts(packing, model, fn_tol) keeps
+// (touching: gap < model.touch_gap, or loaded: fn > fn_tol F0), in the order of
+// packing.contacts, with mu = model.mu, F0 = 2 R_avg model.P_ext and the pressure row's
+// right-hand side 2 V model.P_ext. Throws unjam::Error as build_equilibrium_system does.
+EquilibriumSystem admissible_system(const Packing& packing, const ContactModel& model,
+                                    double fn_tol = 1e-9);
+
+// 1 / M per row of system.A (generalised coordinate): 1/m, 1/m, 2/m for (u_x, u_y, R theta)
+// of each grain of the system (I / R^2 = m / 2), 1 / (2 V model.M_lambda) for lambda dt of
+// the cell (docs/method.md, "The cell strain rate").
+Eigen::VectorXd inverse_masses(const Packing& packing, const EquilibriumSystem& system,
+                               const ContactModel& model);
 
 // How far forces f are from solving a step. Displacements in units of `length` (a probe's
 // opening g), forces in units of F0; every entry is 0 for an exact solution.

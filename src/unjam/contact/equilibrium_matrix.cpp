@@ -9,18 +9,23 @@
 #include <Eigen/SparseCholesky>
 
 #include "unjam/core/error.hpp"
+#include "unjam/core/units.hpp"
 
 namespace unjam {
 
-std::vector<int> select_contacts(const Packing& packing, double gap_tol, double fn_tol) {
-  const double F0 = packing.force_unit();
+std::vector<int> select_contacts(const Packing& packing, const ContactModel& model, double fn_tol) {
+  const double F0 = force_unit(packing.mean_radius(), model.P_ext);
   std::vector<int> selected;
   for (std::size_t k = 0; k < packing.contacts.size(); ++k) {
     const Contact& c = packing.contacts[k];
-    const ContactClass state = classify_contact(c, gap_tol, fn_tol * F0);
+    const ContactClass state = classify_contact(c, model.touch_gap, fn_tol * F0);
     if (state.touching || state.loaded) selected.push_back(static_cast<int>(k));
   }
   return selected;
+}
+
+std::vector<int> select_contacts(const Packing& packing, double gap_tol, double fn_tol) {
+  return select_contacts(packing, with_touch_gap(packing.meta.contact, gap_tol), fn_tol);
 }
 
 EquilibriumSystem build_equilibrium_system(const Packing& packing,

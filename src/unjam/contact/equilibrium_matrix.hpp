@@ -33,9 +33,13 @@
 
 namespace unjam {
 
-// Contacts that enter the admissible set: those carrying force (fn > fn_tol F0) or touching
-// (gap < gap_tol, lengths in units of R_max), by classify_contact (packing/contact_model.hpp).
-// Returns indices into packing.contacts.
+// Contacts that enter the admissible set under `model`: those classify_contact
+// (packing/contact_model.hpp) marks touching (gap < model.touch_gap, units of R_max) or loaded
+// (fn > fn_tol F0, F0 = 2 R_avg model.P_ext). Returns indices into packing.contacts, in order.
+std::vector<int> select_contacts(const Packing& packing, const ContactModel& model,
+                                 double fn_tol = 1e-9);
+
+// The same under the packing's own model (packing.meta.contact) with touch_gap = gap_tol.
 std::vector<int> select_contacts(const Packing& packing, double gap_tol = 1e-9,
                                  double fn_tol = 1e-9);
 

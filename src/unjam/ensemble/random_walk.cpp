@@ -25,7 +25,7 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
   StaticSolveSettings solve;
   solve.tol = options.tol;
   solve.max_sweeps = options.max_sweeps;
-  solve.touch_gap = touch_gap_covering(work.contacts, solve.touch_gap);
+  solve.touch_gap = touch_gap_covering(work.contacts, packing.meta.contact.touch_gap);
   Bath bath;
   bath.P_ext = packing.meta.contact.P_ext;
   NlgsThreading threading;  // measurements of Threading::kAuto, shared by the walk's solves

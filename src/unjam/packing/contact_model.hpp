@@ -17,7 +17,16 @@ struct ContactModel {
   double P_ext = 1.0;       // external pressure of the bath (pressure unit)
   double M_lambda = 100.0;  // bath mass (mass per area; docs/method.md, "The cell strain rate")
   double touch_gap = 1e-6;  // a pair with gap < touch_gap touches (length, units of R_max)
+
+  friend bool operator==(const ContactModel&, const ContactModel&) = default;
 };
+
+// `model` with another touch tolerance (length, units of R_max): the model of a consumer that
+// counts contacts by its own gap option (bounds, ensemble: --gap-tol).
+inline ContactModel with_touch_gap(ContactModel model, double touch_gap) {
+  model.touch_gap = touch_gap;
+  return model;
+}
 
 // The state of one contact of a static packing:
 //   touching:  gap < touch_gap (overlaps, gap < 0, included): it may carry force without the

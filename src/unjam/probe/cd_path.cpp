@@ -737,8 +737,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
 CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings) {
   KinematicProbeSettings ks;
   ks.g = pb.g;
-  ks.touch_gap = settings.touch_gap;
-  ks.M_lambda = settings.bath.M_lambda;
+  ks.model = settings.model;  // the model of the step (build_cd_step)
   KinematicProbe probe(packing, ks);
   // The step's system holds every contact of the packing in order (build_cd_step), so a
   // packing contact's index is its position there.

@@ -21,8 +21,8 @@ CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSett
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(nc) + ")");
   CdStepProblem pb;
-  static_cast<ContactProblem&>(pb) = build_contact_problem(
-      packing, packing_contact_model(packing, settings.bath.M_lambda, settings.touch_gap), settings.dt);
+  static_cast<ContactProblem&>(pb) =
+      build_contact_problem(packing, contact_model_of(packing, settings.model), settings.dt);
   pb.probed = contact;
   pb.g = settings.g;
   pb.g_eff[contact] = -settings.g;

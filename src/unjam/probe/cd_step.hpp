@@ -21,10 +21,9 @@ struct CdStepProblem : ContactProblem {
   double g = 0.0;               // prescribed opening (length); g_eff[probed] = -g
 };
 
-// The step of probing packing.contacts[contact]: build_contact_problem of the packing's own
-// contact model with settings.touch_gap and bath mass settings.bath.M_lambda, time step
-// settings.dt, and g_eff = -settings.g on the probed contact. Throws unjam::Error for a
-// contact that does not exist.
+// The step of probing packing.contacts[contact]: build_contact_problem under
+// contact_model_of(packing, settings.model), time step settings.dt, and g_eff = -settings.g on
+// the probed contact. Throws unjam::Error for a contact that does not exist.
 CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSettings& settings);
 
 // How far forces f are from solving the step: step_residual with displacements in units of g.

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/least_norm.hpp"
 
@@ -11,17 +12,12 @@ namespace unjam {
 KinematicProbe::KinematicProbe(const Packing& packing, const KinematicProbeSettings& settings)
     : packing_(&packing),
       settings_(settings),
-      system_(build_equilibrium_system(packing, select_contacts(packing, settings.touch_gap))),
+      model_(contact_model_of(packing, settings.model)),
+      system_(admissible_system(packing, model_)),
       lp_(system_, settings.method),
-      system_index_(packing.contacts.size(), -1) {
+      system_index_(packing.contacts.size(), -1),
+      inverse_mass_(inverse_masses(packing, system_, model_)) {
   for (int k = 0; k < system_.num_contacts(); ++k) system_index_[system_.contacts[k]] = k;
-  inverse_mass_.resize(system_.A.rows());
-  for (std::size_t g = 0; g < system_.grains.size(); ++g) {
-    const double m = packing.particles.mass(system_.grains[g]);
-    inverse_mass_[3 * g] = inverse_mass_[3 * g + 1] = 1.0 / m;
-    inverse_mass_[3 * g + 2] = 2.0 / m;  // coordinate R theta: mass I / R^2 = m / 2
-  }
-  inverse_mass_[system_.pressure_row()] = 1.0 / (2.0 * packing.cell.area() * settings.M_lambda);
 }
 
 ProbeResult KinematicProbe::probe(int contact) {

@@ -17,8 +17,11 @@
 // optimal face: a contact that carries force in some optimal network is constrained
 // (strict complementarity). The field's unilateral conditions (open contacts do not close,
 // sliding contacts slip against their friction force) are checked, not imposed.
+#include <optional>
+
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/lp/force_lp.hpp"
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_result.hpp"
 
@@ -26,16 +29,19 @@ namespace unjam {
 
 struct KinematicProbeSettings {
   double g = 1e-9;            // prescribed opening (R_max)
-  double touch_gap = 1e-6;    // pairs closer than this enter the admissible set
   double state_tol = 1e-7;    // (units of F0) open: fn <= tol; sliding: mu fn - |ft| <= tol
-  double M_lambda = 100.0;    // bath mass: weight of the cell strain in the kinetic energy
   LpMethod method = LpMethod::barrier;
   int max_rounds = 50;        // active-set updates of the kinematic problem after its first solve
-
+  // mu, P_ext, M_lambda (weight of the cell strain in the kinetic energy) and touch_gap (pairs
+  // closer than this enter the admissible set); empty: the packing's own (packing.meta.contact)
+  std::optional<ContactModel> model;
 };
 
-// Holds the admissible set of one packing and its LP; probes one contact after another.
-// Not thread-safe: give each thread its own copy.
+// Holds the admissible set of one packing and its LP; probes one contact after another. The
+// set and the masses are those of model = contact_model_of(packing, settings.model)
+// (contact/contact_problem.hpp): system() = admissible_system(packing, model), the contacts
+// classify_contact marks touching (gap < model.touch_gap) or loaded (fn > 1e-9 F0), and the
+// cell's mass 2 V model.M_lambda. Not thread-safe: give each thread its own copy.
 class KinematicProbe {
  public:
   KinematicProbe(const Packing& packing, const KinematicProbeSettings& settings);
@@ -49,6 +55,7 @@ class KinematicProbe {
  private:
   const Packing* packing_;
   KinematicProbeSettings settings_;
+  ContactModel model_;
   EquilibriumSystem system_;
   ForceLP lp_;
   std::vector<int> system_index_;  // packing contact -> position in system_.contacts, or -1

@@ -21,10 +21,10 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   Contacts contacts = packing.contacts;
   Particles particles = packing.particles;
 
-  const ContactProblem problem = build_contact_problem(
-      packing, packing_contact_model(packing, set.bath.M_lambda, set.touch_gap), set.dt);
+  const ContactProblem problem =
+      build_contact_problem(packing, contact_model_of(packing, set.model), set.dt);
   StepProblem pb = step_problem(problem);
-  pb.bath.enabled = set.bath.enabled;
+  pb.bath.enabled = set.bath;
   pb.g_eff[contact] = -set.g;
 
   NlgsSettings nlgs;

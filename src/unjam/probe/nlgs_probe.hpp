@@ -4,18 +4,19 @@
 // the static packing (velocities zero, forces R0 as warm start, pressure bath on) in which
 // the probed contact's Signorini condition is shifted by g: its surfaces must separate by g
 // during the step (g_eff = -g; friction as usual). Every other touching pair keeps
-// g_eff = 0 (gap below touch_gap: the packing's own contact tolerance), the rest their gap.
+// g_eff = 0 (gap below the contact model's touch_gap), the rest their gap.
 // F_crit is the probed contact's normal force once the step has converged; convergence is
 // judged on the largest change of a contact's relative velocity in a sweep against g / dt,
 // since forces change by only ~1e-9 relative at first. This is the reference method: its
 // cost grows like (L/d)^2 sweeps and more, see kinematic_probe.hpp for the fast route.
 #include <cstdint>
+#include <optional>
 
 #include <Eigen/Core>
 
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_result.hpp"
-#include "unjam/solver/step_problem.hpp"
 
 namespace unjam {
 
@@ -25,14 +26,15 @@ struct ProbeSettings {
   double velocity_tol = 1e-6;  // converged when max |dU| in a sweep < velocity_tol g / dt
   long long max_sweeps = 10'000'000;
   int min_sweeps = 100;
-  double touch_gap = 1e-6;     // pairs closer than this touch (as in the static solve)
-  Bath bath;                   // the pressure bath stays on during the probe
+  bool bath = true;            // the pressure bath stays on during the probe
   std::uint64_t seed = 0;
+  // mu, P_ext, M_lambda, touch_gap of the step; empty: the packing's own (packing.meta.contact)
+  std::optional<ContactModel> model;
 };
 
 // Probes contact `contact` of a static packing (not modified). The step is the packing's
-// ContactProblem (contact/contact_problem.hpp: its own mu and P_ext, settings.touch_gap,
-// settings.bath.M_lambda, settings.dt) with g_eff = -settings.g on the probed contact.
+// ContactProblem (contact/contact_problem.hpp) under contact_model_of(packing,
+// settings.model) and time step settings.dt, with g_eff = -settings.g on the probed contact.
 ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& settings);
 
 // The same, and the forces of the step's solution in f = (fn_0, ft_0, fn_1, ...), in the

@@ -139,8 +139,7 @@ CampaignSettings campaign_settings_for(const Packing& p) {
   GasSettings gas;
   from_json(p.meta.settings, cs, gas);  // refuses recorded settings that `pack --resume` would refuse
   CampaignSettings s;
-  s.nlgs.touch_gap = s.kinematic.touch_gap = p.meta.contact.touch_gap;
-  s.nlgs.bath.M_lambda = s.kinematic.M_lambda = p.meta.contact.M_lambda;
+  s.nlgs.model = s.kinematic.model = p.meta.contact;
   return s;
 }
 
@@ -271,10 +270,12 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state,
 
 nlohmann::json to_json(const CampaignSettings& s) {
   const bool lp = s.method == ProbeMethod::kLp;
+  const std::optional<ContactModel>& model = lp ? s.kinematic.model : s.nlgs.model;
+  if (!model) throw Error("campaign settings without a contact model (campaign_settings_for sets it)");
   nlohmann::json j = {
       {"method", method_name(s.method)},
       {"g", lp ? s.kinematic.g : s.nlgs.g},
-      {"touch_gap", lp ? s.kinematic.touch_gap : s.nlgs.touch_gap},
+      {"touch_gap", model->touch_gap},
       {"displacement", s.total_displacement ? "total" : "peculiar"},
       {"force_threshold_F0", s.force_threshold},
       {"sample", s.sample},
@@ -282,10 +283,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
   };
   if (lp) {
     j["state_tol_F0"] = s.kinematic.state_tol;
-    j["M_lambda"] = s.kinematic.M_lambda;
+    j["M_lambda"] = model->M_lambda;
   } else {
     j["dt"] = s.nlgs.dt;
-    j["M_lambda"] = s.nlgs.bath.M_lambda;
+    j["M_lambda"] = model->M_lambda;
     // recorded where it is not the default, so that earlier checkpoints still resume
     if (s.method == ProbeMethod::kCd && s.cd.start != CdPathStart::static_network)
       j["cd_start"] = cd_start_name(s.cd.start);

@@ -40,8 +40,8 @@ ProbeMethod method_from_name(const std::string& name);
 
 struct CampaignSettings {
   ProbeMethod method = ProbeMethod::kLp;
-  ProbeSettings nlgs;                   // g, dt, tolerances of the NLGS and Lemke probes
-  KinematicProbeSettings kinematic;     // g, LP and state tolerances of the fast probe
+  ProbeSettings nlgs;                   // g, dt, tolerances, model of the NLGS, Lemke, cd probes
+  KinematicProbeSettings kinematic;     // g, LP and state tolerances, model of the fast probe
   CdPathSettings cd;                    // the cd method's path (where it starts, compliance)
   bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
   double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
@@ -82,9 +82,9 @@ struct CampaignSummary {
   std::string fit_error;             // why there is no fit (e.g. cell too small)
 };
 
-// The settings `unjam probe` starts from: the defaults, with the packing's touch gap (of its
-// static solve) and bath mass M_lambda, its typed contact model (meta.contact). Throws
-// unjam::Error for recorded settings (meta.settings) of the wrong type or range.
+// The settings `unjam probe` starts from: the defaults, with nlgs.model = kinematic.model =
+// packing.meta.contact (mu, P_ext, the touch gap of its static solve, its bath mass M_lambda).
+// Throws unjam::Error for recorded settings (meta.settings) of the wrong type or range.
 CampaignSettings campaign_settings_for(const Packing& packing);
 
 // Throws unjam::Error unless g, dt and velocity_tol are positive and finite.
@@ -126,6 +126,8 @@ CampaignSummary summarize(const Packing& packing, const CampaignState& state,
                           std::optional<FitWindow> window = std::nullopt,
                           int bootstrap_samples = 200, std::uint64_t seed = 1);
 
+// The settings of a campaign (touch_gap and M_lambda: those of the method's contact model).
+// Throws unjam::Error if that model is not set.
 nlohmann::json to_json(const CampaignSettings& settings);
 nlohmann::json to_json(const CampaignState& state);
 
