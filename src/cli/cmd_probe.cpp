@@ -106,21 +106,23 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
 
 // Why the cd path found no solution, where it knows (stats of its first attempt).
 std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
-  char hint[320];
+  const std::string why_fails = "; docs/probe.md, \"Why a path fails\"";
   if (stats.failure == "loop" && stats.lambda_max < 1.0) {
-    std::snprintf(hint, sizeof hint,
-                  "the branch of solutions through the %s closes on itself, turning back at %.3g of the "
-                  "opening: no solution is connected to it (--cd-start compliant takes the rigid limit of stiff "
-                  "contacts instead); docs/probe.md, \"Why a path fails\"",
-                  start == CdPathStart::lp_optimum ? "lp optimum" : "static network", stats.lambda_max);
-  } else if (stats.failure == "loop" || stats.failure == "cycle") {
-    std::snprintf(hint, sizeof hint, "a path at the full opening %s; docs/probe.md, \"Why a path fails\"",
-                  stats.failure == "loop" ? "closes on itself" : "cycles at a degenerate point");
-  } else {
-    std::snprintf(hint, sizeof hint, "the path found none within %g g%s%s; docs/probe.md, \"What limits it\"",
-                  kExactStepTolerance, stats.failure.empty() ? "" : ": ", stats.failure.c_str());
+    char turn[32];
+    std::snprintf(turn, sizeof turn, "%.3g", stats.lambda_max);
+    return std::string("the branch of solutions through the ") +
+           (start == CdPathStart::lp_optimum ? "lp optimum" : "static network") +
+           " closes on itself, turning back at " + turn +
+           " of the opening: no solution is connected to it (--cd-start compliant takes the rigid limit of "
+           "stiff contacts instead)" + why_fails;
   }
-  return hint;
+  if (stats.failure == "loop" || stats.failure == "cycle")
+    return std::string("a path at the full opening ") +
+           (stats.failure == "loop" ? "closes on itself" : "cycles at a degenerate point") + why_fails;
+  char tol[32];
+  std::snprintf(tol, sizeof tol, "%g", kExactStepTolerance);
+  return std::string("the path found none within ") + tol + " g" + (stats.failure.empty() ? "" : ": ") +
+         stats.failure + "; docs/probe.md, \"What limits it\"";
 }
 
 // Why a single probe is not a solution, and what the user can do about it.

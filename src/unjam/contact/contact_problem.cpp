@@ -29,13 +29,6 @@ Eigen::VectorXd ContactProblem::relative_displacement(const Eigen::VectorXd& f) 
   return u;
 }
 
-ContactModel packing_contact_model(const Packing& packing, double M_lambda, double touch_gap) {
-  ContactModel model = packing.meta.contact;
-  model.M_lambda = M_lambda;
-  model.touch_gap = touch_gap;
-  return model;
-}
-
 ContactModel contact_model_of(const Packing& packing, const std::optional<ContactModel>& model) {
   return model ? *model : packing.meta.contact;
 }

@@ -53,10 +53,6 @@ struct ContactProblem {
 // unjam::Error as build_equilibrium_system does.
 ContactProblem build_contact_problem(const Packing& packing, const ContactModel& model, double dt);
 
-// The packing's own contact model: mu and P_ext of its metadata, M_lambda and touch_gap as
-// given (the settings it was made with).
-ContactModel packing_contact_model(const Packing& packing, double M_lambda, double touch_gap);
-
 // The model a consumer's settings name: `model` if set, else the packing's own
 // (packing.meta.contact).
 ContactModel contact_model_of(const Packing& packing, const std::optional<ContactModel>& model);

@@ -93,7 +93,7 @@ struct CdStepGuess {
 // The LP optimum of the probed contact (F_crit = fn_max) and its kinematic field, as a guess.
 CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& step, const ProbeSettings& settings);
 
-// Solves the step of probing packing.contacts[contact] (settings.g, dt, touch_gap, bath).
+// Solves the step of probing packing.contacts[contact] (build_cd_step: settings.g, dt, model).
 // result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.
 // A path that exceeds max_pieces, comes back to a state set it left (its start's: a closed
 // branch; another: cycling at a degenerate point), ends on a ray or returns forces with a
