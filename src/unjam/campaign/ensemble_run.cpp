@@ -118,6 +118,7 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
     walk.seed = in.seed;
     walk.kick = in.kick;
     walk.tol = in.walk_tol;
+    walk.model = ensemble_contact_model(packing, in);  // the model that selected the set
     if (in.progress) walk.progress = [&in](int done, int total) { in.progress("random walk (steps)", done, total); };
     const auto t = std::chrono::steady_clock::now();
     r.walk = sample_random_walk(packing, sys, walk);
