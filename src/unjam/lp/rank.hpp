@@ -25,8 +25,8 @@ struct RankInfo {
 
 // Numerical rank of A_y: singular values at or below `relative_threshold` times the largest
 // row norm of A_y (column norm when A_y is tall) count as zero. Found by subspace inverse
-// iteration for the null space with one sparse LDLT: 0.12 s at 2000 disks, 1.6 s at 8000;
-// Eigen's SparseQR gave the same ranks, measured in docs/ensemble.md.
+// iteration for the null space with one sparse LDLT (its cost, against Eigen's SparseQR,
+// in docs/ensemble.md).
 RankInfo equilibrium_rank(const EquilibriumSystem& system, double relative_threshold = 1e-10);
 
 // The same numerical rank for any sparse matrix (e.g. a subset of the columns of A_y).
