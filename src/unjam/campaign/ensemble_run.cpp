@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "unjam/probe/probe_campaign.hpp"
 
@@ -76,6 +77,15 @@ double quantile(std::vector<double> x, double q) {
   const std::size_t i = static_cast<std::size_t>(pos);
   if (i + 1 >= x.size()) return x.back();
   return x[i] + (pos - i) * (x[i + 1] - x[i]);
+}
+
+CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio) {
+  const auto within = [&ratio](double f) {
+    return static_cast<int>(
+        std::count_if(ratio.begin(), ratio.end(), [f](double x) { return std::abs(x - 1.0) <= f; }));
+  };
+  return {quantile(ratio, 0.0), quantile(ratio, 0.5), quantile(ratio, 1.0),
+          within(0.01),         within(0.02),         within(0.05)};
 }
 
 ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettings& in) {
