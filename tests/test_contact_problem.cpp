@@ -1,8 +1,11 @@
 // The one contact problem (contact/contact_problem.hpp; docs/method.md, "Which contacts
-// count"): every solver of the probe step is checked by the same residual, step_residual, and
-// every consumer classifies the same contacts as touching from the same ContactProblem.
+// count"): every solver of the probe step, and every static solver's networks (the unshifted
+// step), are checked by the same residual, step_residual, and every consumer classifies the
+// same contacts as touching from the same ContactProblem.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <initializer_list>
 #include <limits>
 #include <optional>
@@ -16,6 +19,9 @@
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/ensemble/hit_and_run.hpp"
+#include "unjam/ensemble/random_walk.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
@@ -167,6 +173,61 @@ TEST(ContactProblem, ProbeSettingsCarryThePackingsContactModel) {
   EXPECT_EQ(sys.rhs[sys.pressure_row()], 2.0 * V * 1.5);
   EXPECT_EQ(step.inverse_mass[step.system.pressure_row()], 1.0 / (2.0 * V * 0.25));
   EXPECT_EQ(inverse_masses(p, sys, p.meta.contact)[sys.pressure_row()], 1.0 / (2.0 * V * 0.25));
+}
+
+TEST(StepResidual, StaticNetworksSolveTheUnshiftedStep) {
+  // A static network f0 balances every grain and the pressure (A f0 = b), so q = 0 and
+  // u = g_eff: it solves the packing's own step without a probe (docs/probe.md, "The exact
+  // step"). The same residual checks every static solver's networks: the packing's own (NLGS
+  // and the polish), the LP's optima, hit-and-run's and the random walk's samples (set on the
+  // contacts of the admissible set, zero elsewhere); lengths in units of the probe's opening
+  // g, forces in F0.
+  const Packing p = fixture("p50-mu0.1");
+  const ContactProblem pb = own_problem(p);
+  const double g = campaign_settings_for(p).nlgs.g;
+  const EquilibriumSystem sys = admissible_system(p, ensemble_contact_model(p, {}));
+  const auto on_problem = [&](const ForceNetwork& net) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * pb.num_contacts());
+    for (int k = 0; k < sys.num_contacts(); ++k) {
+      f[2 * sys.contacts[k]] = net.fn[k];
+      f[2 * sys.contacts[k] + 1] = net.ft[k];
+    }
+    return step_residual(pb, f, g).max();
+  };
+  // Bounds in units of g (measured: the packing's own 4.5e-9, LP 4.1e-7 over every tenth
+  // contact's max, hit-and-run 1.2e-11, walk 1.8e-12): polished networks balance to
+  // round-off, the barrier's optima to CLP's feasibility tolerance (1e-9, ForceLP).
+  constexpr double kStatic = 1e-8, kLp = 1e-6;
+  const double own = step_residual(pb, packing_forces(p, pb.system), g).max();
+  EXPECT_LE(own, kStatic);
+
+  ForceLP lp(sys);
+  double worst_lp = 0.0;
+  for (int k = 0; k < sys.num_contacts(); k += 10) {
+    lp.max_fn(k);
+    worst_lp = std::max(worst_lp, on_problem(lp.network()));
+  }
+  const ForceBounds bounds = compute_force_bounds(sys, {});
+  double worst_hr = 0.0, worst_walk = 0.0;
+  HitAndRunOptions hr;
+  hr.samples = 50;
+  hr.on_sample = [&](const ForceNetwork& net) { worst_hr = std::max(worst_hr, on_problem(net)); };
+  sample_hit_and_run(sys, bounds, hr);
+  RandomWalkOptions walk;
+  walk.samples = 20;
+  walk.model = ensemble_contact_model(p, {});
+  walk.on_sample = [&](const ForceNetwork& net) { worst_walk = std::max(worst_walk, on_problem(net)); };
+  sample_random_walk(p, sys, walk);
+  std::printf("[ step ] p50-mu0.1, static networks' step residual: own %.3g, LP %.3g, "
+              "hit-and-run %.3g, walk %.3g\n", own, worst_lp, worst_hr, worst_walk);
+  EXPECT_LE(worst_lp, kLp);
+  EXPECT_LE(worst_hr, kStatic);
+  EXPECT_LE(worst_walk, kStatic);
+
+  // A network off balance by 1e-3 F0 on one contact moves grains: it fails the residual.
+  Eigen::VectorXd bad = packing_forces(p, pb.system);
+  bad[2 * sys.contacts[0]] += 1e-3 * p.force_unit();
+  EXPECT_GT(step_residual(pb, bad, g).max(), 1e3 * kLp);
 }
 
 TEST(ContactProblem, TheLpProbesAdmissibleSetIsTheModelsTouchingContacts) {

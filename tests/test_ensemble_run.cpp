@@ -109,6 +109,14 @@ TEST(EnsembleRun, NoProbeAndQuantiles) {
   EXPECT_EQ(quantile({3.0, 1.0, 2.0}, 0.5), 2.0);
   EXPECT_EQ(quantile({3.0, 1.0, 2.0, 4.0}, 0.5), 2.5);
   EXPECT_EQ(quantile({3.0, 1.0, 2.0}, 1.0), 3.0);
+  // F_crit / fn_max's summary: quantiles, and the ratios within 1, 2 and 5 % of 1.
+  const CriticalForceRatio c = critical_force_ratio({1.0, 0.995, 1.015, 0.96, 0.5});
+  EXPECT_EQ(c.min, 0.5);
+  EXPECT_EQ(c.median, 0.995);
+  EXPECT_EQ(c.max, 1.015);
+  EXPECT_EQ(c.within_1_percent, 2);
+  EXPECT_EQ(c.within_2_percent, 3);
+  EXPECT_EQ(c.within_5_percent, 4);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "unjam/core/error.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/lp/rank.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace {

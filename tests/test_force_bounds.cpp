@@ -10,6 +10,7 @@
 
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/rank.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace {

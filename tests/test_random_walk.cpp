@@ -1,6 +1,7 @@
 // The paper's random walk over the admissible force networks (random_walk.hpp): admissibility
-// of every sample, sampled ranges inside the exact LP intervals, seeding, the unique network
-// of an isostatic mu = 0 packing; and scripts/plot_fig4.py on a small ensemble.csv.
+// of every sample, sampled ranges inside the exact LP intervals, seeding, the contact model's
+// bath in the relaxation, the unique network of an isostatic mu = 0 packing; and
+// scripts/plot_fig4.py on a small ensemble.csv.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -83,6 +84,35 @@ TEST(RandomWalk, SameSeedSameSamples) {
   options.seed = 8;
   const auto c = unjam::sample_random_walk(d.packing, d.sys, options);
   EXPECT_NE(a.mean, c.mean);
+}
+
+TEST(RandomWalk, RelaxesUnderTheContactModelsBath) {
+  // The relaxation's bath is the contact model's (bath_of: P_ext and M_lambda): the packing's
+  // own by default, or the one the options name. The solver's path, and so the polished
+  // samples' bytes, depend on M_lambda; the network's admissibility does not.
+  const auto& d = p50();
+  unjam::RandomWalkOptions options;
+  options.samples = 20;
+  options.seed = 3;
+  const auto own = unjam::sample_random_walk(d.packing, d.sys, options);
+  options.model = d.packing.meta.contact;
+  const auto named = unjam::sample_random_walk(d.packing, d.sys, options);
+  EXPECT_EQ(own.mean, named.mean);
+  EXPECT_EQ(own.sweeps, named.sweeps);
+
+  unjam::ContactModel heavy = d.packing.meta.contact;
+  heavy.M_lambda *= 10.0;
+  options.model = heavy;
+  const auto heavy_named = unjam::sample_random_walk(d.packing, d.sys, options);
+  Packing heavy_packing = d.packing;
+  heavy_packing.meta.contact = heavy;
+  options.model.reset();
+  const auto heavy_own = unjam::sample_random_walk(heavy_packing, d.sys, options);
+  std::printf("[ walk ] p50, 20 steps: %lld sweeps at M_lambda %g, %lld at %g\n", own.sweeps,
+              d.packing.meta.contact.M_lambda, heavy_own.sweeps, heavy.M_lambda);
+  EXPECT_EQ(heavy_named.mean, heavy_own.mean);
+  EXPECT_EQ(heavy_named.sweeps, heavy_own.sweeps);
+  EXPECT_NE(heavy_own.mean, own.mean);  // another bath mass: another path of the solver
 }
 
 TEST(RandomWalk, IsostaticFrictionlessPackingHasOneNetwork) {

@@ -15,6 +15,7 @@
 #include "static_packing_checks.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/lp/rank.hpp"
 #include "unjam/protocol/compaction.hpp"
 #include "unjam/protocol/gas.hpp"
 #include "unjam/solver/static_solve.hpp"

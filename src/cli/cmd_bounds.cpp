@@ -27,6 +27,7 @@
 #include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/rank.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace unjam::cli {

@@ -15,9 +15,7 @@
 //   DIR/ensemble.json  eta and coverage of the LP widths per method, F_crit / fn_max
 //                      statistics, settings, timings, version, command line;
 //   DIR/ensemble-samples.csv with --write-samples (hit-and-run samples: fn of every contact).
-#include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -141,12 +139,13 @@ nlohmann::ordered_json probe_json(const EnsembleSettings& s, const EnsembleRepor
   j["settings"] = {{"g", s.probe_g}, {"dt", s.probe_dt}, {"velocity_tol_g_per_dt", s.probe_velocity_tol},
                    {"threads", s.threads}};
   if (!ratio.empty()) {
-    const auto within = [&ratio](double f) {
-      return std::count_if(ratio.begin(), ratio.end(), [f](double x) { return std::abs(x - 1.0) <= f; });
-    };
-    j["f_crit_over_fn_max"] = {{"min", quantile(ratio, 0.0)},         {"median", quantile(ratio, 0.5)},
-                               {"max", quantile(ratio, 1.0)},         {"within_1_percent", within(0.01)},
-                               {"within_2_percent", within(0.02)}, {"within_5_percent", within(0.05)}};
+    const CriticalForceRatio c = critical_force_ratio(ratio);
+    j["f_crit_over_fn_max"] = {{"min", c.min},
+                               {"median", c.median},
+                               {"max", c.max},
+                               {"within_1_percent", c.within_1_percent},
+                               {"within_2_percent", c.within_2_percent},
+                               {"within_5_percent", c.within_5_percent}};
   }
   j["seconds"] = r.probe_seconds;
   return j;

@@ -18,6 +18,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/rank.hpp"
 #include "unjam/packing/export.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/probe_campaign.hpp"

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "unjam/probe/probe_campaign.hpp"
 
@@ -78,6 +79,15 @@ double quantile(std::vector<double> x, double q) {
   return x[i] + (pos - i) * (x[i + 1] - x[i]);
 }
 
+CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio) {
+  const auto within = [&ratio](double f) {
+    return static_cast<int>(
+        std::count_if(ratio.begin(), ratio.end(), [f](double x) { return std::abs(x - 1.0) <= f; }));
+  };
+  return {quantile(ratio, 0.0), quantile(ratio, 0.5), quantile(ratio, 1.0),
+          within(0.01),         within(0.02),         within(0.05)};
+}
+
 ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettings& in) {
   return with_touch_gap(packing.meta.contact, in.gap_tol);
 }
@@ -118,6 +128,7 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
     walk.seed = in.seed;
     walk.kick = in.kick;
     walk.tol = in.walk_tol;
+    walk.model = ensemble_contact_model(packing, in);  // the model that selected the set
     if (in.progress) walk.progress = [&in](int done, int total) { in.progress("random walk (steps)", done, total); };
     const auto t = std::chrono::steady_clock::now();
     r.walk = sample_random_walk(packing, sys, walk);

@@ -81,4 +81,12 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
 // Linear-interpolation quantile q in [0, 1] of x (non-empty).
 double quantile(std::vector<double> x, double q);
 
+// F_crit / fn_max over the probed contacts (EnsembleReport::f_crit_over_fn_max): its min,
+// median and max (quantile), and how many ratios lie within 1, 2 and 5 % of 1 (|x - 1| <= f).
+struct CriticalForceRatio {
+  double min = 0.0, median = 0.0, max = 0.0;
+  int within_1_percent = 0, within_2_percent = 0, within_5_percent = 0;
+};
+CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio);  // ratio non-empty
+
 }  // namespace unjam

@@ -13,6 +13,7 @@
 #include <coin/ClpSimplex.hpp>
 
 #include "unjam/core/error.hpp"
+#include "unjam/lp/rank.hpp"
 
 namespace unjam {
 
@@ -74,7 +75,7 @@ class DenseAffineSet : public AffineSet {
 
 // Beyond max_dense_columns: the orthogonal projector onto null(A),
 //     P r = r - A^T x,   (A A^T) x = A r,
-// with one sparse LDLT of A A^T + delta I (RegularisedGram of A^T, equilibrium_matrix.hpp:
+// with one sparse LDLT of A A^T + delta I (RegularisedGram of A^T, lp/rank.hpp:
 // the dependent rows of A make A A^T singular) and two steps of iterative refinement against
 // A A^T, which remove the regularisation's error. dir = P r / |P r| with r standard normal in
 // R^n: P r is an isotropic Gaussian in null(A), so dir is uniform on its sphere, as in the

@@ -10,7 +10,7 @@
 //      cone columns: an orthonormal basis B from the dense column-pivoting QR of A^T (Eigen),
 //      rank threshold 1e-10 relative (O(n^2) memory, O(n^2 m) time). Beyond: no basis, but
 //      the projector P = I - A^T (A A^T)^+ A through one sparse LDLT of A A^T, and the
-//      dimension from numerical_rank (equilibrium_matrix.hpp).
+//      dimension from numerical_rank (lp/rank.hpp).
 //   2. Start: a Chebyshev-like centre, max s subject to A y = rhs, y_i >= s (CLP), then
 //      projected exactly onto A y = rhs.
 //   3. Step: a direction d uniform on the unit sphere of the null space (dense: B z / |z|;

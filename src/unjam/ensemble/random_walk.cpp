@@ -4,9 +4,11 @@
 #include <limits>
 #include <random>
 
+#include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/contact_model.hpp"
 #include "unjam/solver/static_solve.hpp"
+#include "unjam/solver/step_problem.hpp"
 
 namespace unjam {
 
@@ -17,17 +19,20 @@ RandomWalkResult sample_random_walk(const Packing& packing, const EquilibriumSys
   const int Nc = system.num_contacts();
 
   // The copy the solver relaxes: the same grains and cell, only the contacts of the set, in
-  // the order of system.contacts (solve_static keeps the order). Every contact of the set
-  // touches: the solve's touch gap covers the set (touch_gap_covering).
+  // the order of system.contacts (solve_static keeps the order), under the walk's contact
+  // model (solve_static takes mu from the copy's metadata, P_ext and M_lambda from its bath).
+  // Every contact of the set touches: the solve's touch gap covers the set
+  // (touch_gap_covering).
+  const ContactModel model = contact_model_of(packing, options.model);
   Packing work = packing;
+  work.meta.contact = model;
   work.contacts.clear();
   for (const int c : system.contacts) work.contacts.push_back(packing.contacts[c]);
   StaticSolveSettings solve;
   solve.tol = options.tol;
   solve.max_sweeps = options.max_sweeps;
-  solve.touch_gap = touch_gap_covering(work.contacts, packing.meta.contact.touch_gap);
-  Bath bath;
-  bath.P_ext = packing.meta.contact.P_ext;
+  solve.touch_gap = touch_gap_covering(work.contacts, model.touch_gap);
+  const Bath bath = bath_of(model);
   NlgsThreading threading;  // measurements of Threading::kAuto, shared by the walk's solves
 
   RandomWalkResult result;

@@ -10,8 +10,9 @@
 //      cone: NLGS projects every contact onto its law at its first update, and the warm
 //      start only applies the kicked forces to the velocities (no clamp needed);
 //   2. relax: solve_static on a copy of the packing that holds only the contacts of the set
-//      (all treated as touching, g_eff = 0), warm-started from the kicked forces: NLGS to a
-//      coarse residual, then the exact polish onto the balance rows;
+//      (all treated as touching, g_eff = 0), under the contact model of the options (mu, and
+//      the bath of P_ext and M_lambda: bath_of), warm-started from the kicked forces: NLGS
+//      to a coarse residual, then the exact polish onto the balance rows;
 //   3. if the solve converged, the relaxed network is the new state of the walk and one
 //      sample; otherwise the step counts as a failure and the walk stays where it was.
 // Every sample is admissible: balance and pressure rows to the solve tolerance, fn >= 0,
@@ -22,6 +23,7 @@
 // `seed`; the NLGS result does not depend on the thread count: same seed, same samples.
 #include <cstdint>
 #include <functional>
+#include <optional>
 
 #include <Eigen/Core>
 
@@ -29,6 +31,7 @@
 
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/packing/contact_model.hpp"
 #include "unjam/packing/packing.hpp"
 
 namespace unjam {
@@ -40,6 +43,9 @@ struct RandomWalkOptions {
   double tol = 1e-10;       // static solve target: grain force, torque / R residual / F0 and
                             // |P_in / P_ext - 1|
   int max_sweeps = 200000;  // NLGS sweeps per relaxation before it counts as a failure
+  // The contact model of the relaxation (mu, the bath's P_ext and M_lambda, touch_gap: the
+  // model that selected `system`); empty: the packing's own (contact_model_of).
+  std::optional<ContactModel> model;
   std::function<void(const ForceNetwork&)> on_sample;  // every sample, may be empty
   std::function<void(int, int)> progress;              // (steps done, steps), may be empty
 };

@@ -16,9 +16,9 @@
 // objectives equal to ~2e-9 relative. Its point is not always that close (a case on p50 at
 // tolerance 1e-12 was 2e-6 off, relative, with CLP's objectives equal to 2e-11), so it is not
 // accepted: the LP is solved again with the tolerances 10x and then 100x looser, which ends
-// optimal (the 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex).
-// Primal simplex from the barrier's point, the former fallback, took 4.5 minutes there,
-// against 2 s per barrier solve.
+// optimal (the 8000-disk case: 39 iterations at 1e-8, within 3e-9 of the simplex vertex),
+// where primal simplex from the barrier's point takes minutes against seconds
+// (docs/benchmarks.md, section 7).
 #include <memory>
 
 class ClpCholeskyBase;

@@ -3,26 +3,23 @@
 // barrier iteration, (A D A^T + S + delta^2 I) dy = r with A the m x n constraint matrix (fixed
 // for a sequence of LPs), D > 0 and S >= 0 diagonal (columns' and slacks' scaling, changing
 // every iteration; S = 0 for our equality rows). CLP's sparse LDL^T (ClpCholeskyBase) solves
-// them. This subclass changes four things, measured on the packings of docs/benchmarks.md
-// (the optima agree with CLP's own path to its accuracy, 4e-8 relative over the 2000-disk
-// bounds):
+// them. This subclass changes four things (each measured, with the optima equal to CLP's own
+// path to its accuracy, in docs/ensemble.md, "Bounds of a 2000-disk packing (measured)", and
+// docs/benchmarks.md, section 7):
 //   - ordering and symbolic analysis are done once, on the first LP, and shared by copies
-//     (CLP repeats them for every LP): ~3 % per LP;
+//     (CLP repeats them for every LP);
 //   - the factor switches to dense storage only when the trailing block is kGoDense = 95 %
 //     full (CLP: 70 %): the packings' separators are sparse and the dense kernel wastes work
-//     on their zeros. 0.235 -> 0.195 s per LP at 2000 disks, 2.51 -> 2.02 s at 8000;
+//     on their zeros;
 //   - A D A^T is formed by a scatter precomputed from A and the factor's pattern: every pair
 //     (p, q) of entries of a column c adds A_pc A_qc d_c to one fixed slot of the factor's
-//     storage. CLP forms it row by row through a dense work vector and gathers it into the
-//     pattern, ~17 % of a 2000-disk LP; the scatter takes ~5 %. Per LP 0.183 -> 0.160 s at
-//     2000 disks (max and min LPs of 60 contacts), 1.63 -> 1.45 s at 8000 (4 contacts), the
-//     optima equal to 4e-11;
+//     storage (CLP forms it row by row through a dense work vector and gathers it into the
+//     pattern);
 //   - from `nested_dissection_rows` rows of A on, the rows are ordered by METIS's nested
 //     dissection (dense rows, as the pressure row, last) instead of CLP's minimum degree.
 //     A packing's contact graph is nearly planar, where nested dissection needs the fewest
-//     operations as it grows: per LP 0.72 -> 0.63 s at 4000 disks (10 939 rows), 2.36 ->
-//     1.89 s at 8000 (21 829 rows); at 2000 disks (5410 rows) it is 2-12 % slower, at 500
-//     and 1000 within 10 % (BarrierSolver's default threshold, kNestedDissectionMinRows).
+//     operations as it grows; below BarrierSolver's default threshold
+//     (kNestedDissectionMinRows) it is not measurably faster than CLP's ordering.
 // Everything else (which rows are dropped for small pivots, the perturbation of the diagonal,
 // the factorisation itself and the solves) is CLP's.
 #include <memory>

@@ -22,9 +22,7 @@ StepProblem step_problem(const ContactProblem& problem) {
   pb.cell = problem.cell;
   pb.dt = problem.dt;
   pb.mu = problem.model.mu;
-  pb.bath.enabled = true;
-  pb.bath.P_ext = problem.model.P_ext;
-  pb.bath.M_lambda = problem.model.M_lambda;
+  pb.bath = bath_of(problem.model);
   pb.lambda_t = 0.0;
   pb.g_eff.assign(problem.g_eff.data(), problem.g_eff.data() + problem.g_eff.size());
   return pb;

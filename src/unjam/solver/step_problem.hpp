@@ -18,6 +18,9 @@ struct Bath {
   double M_lambda = 100.0;  // inertia of the cell (mass units per area; docs/method.md)
 };
 
+// The bath of a contact model: its P_ext and M_lambda, enabled.
+inline Bath bath_of(const ContactModel& model) { return {true, model.P_ext, model.M_lambda}; }
+
 struct StepProblem {
   Cell cell;                   // cell at time t; V = Lx Ly
   double dt = 0.01;            // time step (simulation time units)
