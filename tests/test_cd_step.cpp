@@ -299,6 +299,38 @@ TEST(CdPath, TheBranchFromTheStaticNetworkCanCloseOnItself) {
   EXPECT_LE(c82.residual.max(), kExactStepTolerance);
 }
 
+TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
+  // p200-mu1, contact 14: lowered from compliance 0.1, the soft solution's branch turns back
+  // in the compliance at ~0.012 (the proximal paths there close on themselves) and the
+  // continuation has no solution there; followed afresh from the static network at a tenth
+  // of that compliance, it is exact (docs/probe.md, "Where the path starts").
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings once;
+  once.start = CdPathStart::compliant;
+  once.max_restarts = 0;
+  CdPathStats stopped;
+  const CdStepSolution none = probe_cd_path(p, 14, ProbeSettings{}, once, &stopped);
+  EXPECT_EQ(none.f.size(), 0);
+  EXPECT_EQ(stopped.restarts, 0);
+  EXPECT_GT(stopped.compliance_end, 1e-3);
+  EXPECT_LT(stopped.compliance_end, 0.1);
+  CdPathSettings restarted;
+  restarted.start = CdPathStart::compliant;
+  CdPathStats stats;
+  const CdStepSolution s = probe_cd_path(p, 14, ProbeSettings{}, restarted, &stats);
+  EXPECT_EQ(stats.failure, "");
+  EXPECT_EQ(stats.restarts, 1);
+  EXPECT_EQ(stats.compliance_end, 0.0);
+  EXPECT_LE(s.residual.max(), kExactStepTolerance);
+  EXPECT_GT(s.result.f_crit, 0.0);
+  // Without retries there is no restart either.
+  CdPathSettings no_retry = restarted;
+  no_retry.retry = false;
+  CdPathStats single;
+  probe_cd_path(p, 14, ProbeSettings{}, no_retry, &single);
+  EXPECT_EQ(single.attempts, 1);
+}
+
 TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {
   // A path that needs more pieces than allowed says so (no F_crit, residual kNoSolution)
   // instead of returning the forces where it stopped.

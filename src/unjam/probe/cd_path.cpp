@@ -699,12 +699,15 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     path.set_compliance(std::max(kappa_rigid, factor * path.compliance()), f_latest);
     ++stats.lowerings;
     if (!path.factorize()) {
+      stats.failure = "singular";
+      stats.compliance_end = path.compliance() * dt2 * F0 / pb.g;
       given_up = true;
       break;
     }
     if (!proximal_path()) {
       if (++failed > kMaxLoweringRetries) {
         stats.failure = failure;
+        stats.compliance_end = path.compliance() * dt2 * F0 / pb.g;
         given_up = true;
         break;
       }
@@ -773,33 +776,38 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   }
   // The compliance trades the conditioning of the sticking set's system against its own
   // displacements; where the path at ps.compliance is not exact, it is followed again at ten
-  // times it, then a tenth of it, and the solution with the lowest residual is kept. The
-  // compliant continuation is retried instead with its lowering factor squared (larger
-  // steps), then square-rooted (smaller ones): its failures are cycles at degenerate points
-  // met on the way down, and another schedule passes other points.
+  // times it, then a tenth of it, and the solution with the lowest residual is kept.
+  // The compliant continuation fails where its lowering stops at a compliance c: the
+  // proximal paths there close on themselves, i.e. the branch of soft solutions it follows
+  // turns back in the compliance. It is then followed afresh from the static network at
+  // c / restart_divisor, whose path reaches a solution on another branch, and lowered from
+  // there (docs/probe.md, "Where the path starts").
   const bool soft = ps.start == CdPathStart::compliant && ps.compliant_start > ps.compliance;
   CdStepSolution best;
   CdPathStats best_stats;
-  const double f = ps.compliance_factor;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
-  const double factors[] = {f, f * f, std::sqrt(f)};
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    if (attempt > 0 && !ps.retry) break;
+  const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : 3;
+  double start = ps.compliant_start;  // soft: the compliance of the next path from the static network
+  for (int attempt = 0; attempt < attempts; ++attempt) {
+    if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)))) break;
     CdPathStats stats;
     CdPathSettings at = ps;
+    if (!soft) at.compliance = compliances[attempt];
+    CdStepSolution sol = follow(pb, packing, at, guess, soft ? start : at.compliance, at.compliance, stats);
+    // Below where this lowering stopped (or, where its first path failed, a decade lower),
+    // never below the rigid compliance itself: a path there is the static start's.
     if (soft)
-      at.compliance_factor = factors[attempt];
-    else
-      at.compliance = compliances[attempt];
-    CdStepSolution sol = follow(pb, packing, at, guess, soft ? ps.compliant_start : at.compliance,
-                                at.compliance, stats);
+      start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / std::max(1.0 + 1e-12, ps.restart_divisor),
+                       ps.compliance);
     stats.attempts = best_stats.attempts + 1;
+    stats.restarts = soft ? attempt : 0;
     const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
     if (better || best_stats.attempts == 0) {
       best = std::move(sol);
       best_stats = stats;
     } else {
       best_stats.attempts = stats.attempts;
+      best_stats.restarts = stats.restarts;
     }
     if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
   }

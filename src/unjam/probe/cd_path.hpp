@@ -60,10 +60,15 @@ struct CdPathSettings {
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
   int max_updated_rows = 48;  // rows of S changed before it is factorised afresh (0: every piece)
   bool retry = true;          // where not exact: again at 10 x and 0.1 x the compliance
+                              // (compliant: restarted below where the lowering stopped)
   // CdPathStart::compliant: the path's compliance, then its factor per proximal step down
-  // to `compliance`.
+  // to `compliance`; where the lowering stops at a compliance c (the solution it follows
+  // ends there), the path is followed afresh from the static network at c / restart_divisor,
+  // up to max_restarts times (docs/probe.md, "Where the path starts").
   double compliant_start = 0.1;
   double compliance_factor = 0.5;
+  double restart_divisor = 10.0;
+  int max_restarts = 6;
 };
 
 struct CdPathStats {
@@ -75,6 +80,9 @@ struct CdPathStats {
   int attempts = 0;           // paths followed (1 + retries)
   int open = 0, sliding = 0;  // final states (the probed contact not counted as open)
   double lambda_max = 0.0;    // the largest lambda the first path reached (1: its end)
+  double compliance_end = 0.0;  // compliant: the compliance (as `compliance`) where the
+                                // lowering of the returned attempt stopped; 0 if it did not
+  int restarts = 0;           // compliant: paths followed afresh below where a lowering stopped
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual)
