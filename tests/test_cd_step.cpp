@@ -329,6 +329,10 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   CdPathStats single;
   probe_cd_path(p, 14, ProbeSettings{}, no_retry, &single);
   EXPECT_EQ(single.attempts, 1);
+  // A divisor that would not lower the compliance is refused.
+  CdPathSettings bad = restarted;
+  bad.restart_divisor = 1.0;
+  EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, bad), Error);
 }
 
 TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {

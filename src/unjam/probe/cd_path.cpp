@@ -15,6 +15,7 @@
 #include <klu.h>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/error.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 
 namespace unjam {
@@ -617,13 +618,16 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
                       const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
+  // A compliance of CdPathSettings (a fraction of g / (dt^2 F0)) as kappa, and back.
+  const auto kappa_of = [&](double c) { return c * pb.g / (dt2 * F0); };
+  const auto compliance_of = [&](double kappa) { return kappa * dt2 * F0 / pb.g; };
   // The static network, its tangential forces drawn into the cone's interior by distinct
   // relative amounts ~1e-9: a contact at the cone's edge (fully mobilised) starts sticking
   // and its event happens at its own lambda, so that no two events tie at lambda = 0. The
   // path starts from that network's own balance A f0 (the balance rows' lambda term).
   Eigen::VectorXd f0 = packing_forces(packing, pb.system);
   for (int k = 0; k < nc; ++k) f0[2 * k + 1] *= 1.0 - 1e-9 * (1.0 + static_cast<double>(k) / nc);
-  StepPath path(pb, f0, compliance * pb.g / (dt2 * F0), ps.max_updated_rows);
+  StepPath path(pb, f0, kappa_of(compliance), ps.max_updated_rows);
 
   if (guess) {
     start_from_guess(path, pb, *guess, ps.guess_margin);
@@ -690,7 +694,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   // the latest solution with the factor's square root (a smaller step), up to
   // kMaxLoweringRetries times in a row.
   constexpr int kMaxLoweringRetries = 4;
-  const double kappa_rigid = rigid * pb.g / (dt2 * F0);
+  const double kappa_rigid = kappa_of(rigid);
   double factor = ps.compliance_factor;
   int failed = 0;
   bool given_up = false;
@@ -698,28 +702,22 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   while (!exact_enough() && path.compliance() > kappa_rigid * (1.0 + 1e-12)) {
     path.set_compliance(std::max(kappa_rigid, factor * path.compliance()), f_latest);
     ++stats.lowerings;
-    if (!path.factorize()) {
-      stats.failure = "singular";
-      stats.compliance_end = path.compliance() * dt2 * F0 / pb.g;
+    const bool factorized = path.factorize();
+    if (factorized && proximal_path()) {
+      f_latest = path.forces(x0 + x1);
+      held = path.held();
+      failed = 0;
+      factor = ps.compliance_factor;
+      keep_if_better(f_latest);
+    } else if (factorized && ++failed <= kMaxLoweringRetries) {
+      path.restore(held);
+      factor = std::sqrt(factor);
+    } else {  // the lowering stops here (probe_cd_path restarts below it)
+      stats.failure = factorized ? failure : "singular";
+      stats.compliance_end = compliance_of(path.compliance());
       given_up = true;
       break;
     }
-    if (!proximal_path()) {
-      if (++failed > kMaxLoweringRetries) {
-        stats.failure = failure;
-        stats.compliance_end = path.compliance() * dt2 * F0 / pb.g;
-        given_up = true;
-        break;
-      }
-      path.restore(held);
-      factor = std::sqrt(factor);
-      continue;
-    }
-    f_latest = path.forces(x0 + x1);
-    held = path.held();
-    failed = 0;
-    factor = ps.compliance_factor;
-    keep_if_better(f_latest);
   }
   // At the rigid compliance: proximal steps while they lower the residual.
   for (int r = 0; !given_up && r < ps.refinements && !exact_enough(); ++r) {
@@ -783,6 +781,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   // c / restart_divisor, whose path reaches a solution on another branch, and lowered from
   // there (docs/probe.md, "Where the path starts").
   const bool soft = ps.start == CdPathStart::compliant && ps.compliant_start > ps.compliance;
+  if (soft && !(ps.restart_divisor > 1.0))
+    throw Error("cd path: restart_divisor must be > 1 (got " + std::to_string(ps.restart_divisor) + ")");
   CdStepSolution best;
   CdPathStats best_stats;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
@@ -794,23 +794,21 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     CdPathSettings at = ps;
     if (!soft) at.compliance = compliances[attempt];
     CdStepSolution sol = follow(pb, packing, at, guess, soft ? start : at.compliance, at.compliance, stats);
-    // Below where this lowering stopped (or, where its first path failed, a decade lower),
+    // restart_divisor below where this lowering stopped (or this path's start, where it failed),
     // never below the rigid compliance itself: a path there is the static start's.
     if (soft)
-      start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / std::max(1.0 + 1e-12, ps.restart_divisor),
-                       ps.compliance);
+      start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / ps.restart_divisor, ps.compliance);
     stats.attempts = best_stats.attempts + 1;
-    stats.restarts = soft ? attempt : 0;
     const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
     if (better || best_stats.attempts == 0) {
       best = std::move(sol);
       best_stats = stats;
     } else {
       best_stats.attempts = stats.attempts;
-      best_stats.restarts = stats.restarts;
     }
     if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
   }
+  best_stats.restarts = soft ? best_stats.attempts - 1 : 0;  // every attempt after the first
   // A path that ends on a nearly singular state set returns forces far from any solution;
   // those are no solution, not a probe to average.
   if (best.f.size() > 0 && !(best.residual.max() <= kMaxPathResidual)) {
