@@ -51,10 +51,9 @@ class Klu {
     return numeric_ != nullptr;
   }
 
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) {
-    Eigen::VectorXd x = b;
-    klu_solve(symbolic_, numeric_, static_cast<int>(x.size()), 1, x.data(), &common_);
-    return x;
+  // B <- S^-1 B, all columns in one pass over the factors.
+  void solve_in_place(Eigen::MatrixXd& B) {
+    klu_solve(symbolic_, numeric_, static_cast<int>(B.rows()), static_cast<int>(B.cols()), B.data(), &common_);
   }
 
   int fresh() const { return fresh_; }
@@ -226,6 +225,7 @@ class StepPath {
     S_.setFromTriplets(t.begin(), t.end());
     S_.makeCompressed();
     base_state_ = state_;
+    S_rows_ = S_;
     S_abs_ = S_.cwiseAbs();
     slot_.assign(2 * nc_, -1);
     rows_.clear();
@@ -244,13 +244,18 @@ class StepPath {
   bool set_state(int k, State s) {
     state_[k] = s;
     if (rows_.size() + 2 > max_updated_rows_) return factorize();
+    std::vector<int> added;  // rows changed for the first time since S_b: Z's new columns
     for (const int r : {2 * k, 2 * k + 1}) {
       if (slot_[r] >= 0) continue;
       slot_[r] = static_cast<int>(rows_.size());
       rows_.push_back(r);
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(S_.rows());
-      e[r] = 1.0;
-      Z_.col(slot_[r]) = lu_.solve(e);
+      added.push_back(r);
+    }
+    if (!added.empty()) {
+      Eigen::MatrixXd E = Eigen::MatrixXd::Zero(S_.rows(), static_cast<Eigen::Index>(added.size()));
+      for (std::size_t j = 0; j < added.size(); ++j) E(added[j], static_cast<Eigen::Index>(j)) = 1.0;
+      lu_.solve_in_place(E);
+      for (std::size_t j = 0; j < added.size(); ++j) Z_.col(slot_[added[j]]) = E.col(static_cast<Eigen::Index>(j));
     }
     for (const int r : {2 * k, 2 * k + 1}) {
       std::vector<std::pair<int, double>>& d = D_[slot_[r]];
@@ -273,21 +278,22 @@ class StepPath {
 
   // x(lambda) = x0 + lambda x1 of the current states.
   void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) {
-    Eigen::VectorXd r0 = Eigen::VectorXd::Zero(n_ + 2 * nc_), r1 = r0;
-    r0.head(n_) = -load0_;
-    r1.head(n_) = -load1_;
+    Eigen::MatrixXd r = Eigen::MatrixXd::Zero(n_ + 2 * nc_, 2);  // columns: x0's, x1's
+    r.col(0).head(n_) = -load0_;
+    r.col(1).head(n_) = -load1_;
     for (int k = 0; k < nc_; ++k) {
       const int rn = n_ + 2 * k, rt = rn + 1;
       if (!closed(state_[k])) continue;
-      r0[rn] = -gap0_[k] / dt2_ + kappa_ * fref0_[2 * k];
-      r1[rn] = -gap1_[k] / dt2_ + kappa_ * fref1_[2 * k];
+      r(rn, 0) = -gap0_[k] / dt2_ + kappa_ * fref0_[2 * k];
+      r(rn, 1) = -gap1_[k] / dt2_ + kappa_ * fref1_[2 * k];
       if (state_[k] == State::kStick) {
-        r0[rt] = -tgap0_[k] / dt2_ + kappa_ * fref0_[2 * k + 1];
-        r1[rt] = -tgap1_[k] / dt2_ + kappa_ * fref1_[2 * k + 1];
+        r(rt, 0) = -tgap0_[k] / dt2_ + kappa_ * fref0_[2 * k + 1];
+        r(rt, 1) = -tgap1_[k] / dt2_ + kappa_ * fref1_[2 * k + 1];
       }
     }
-    x0 = solve_full(r0);
-    x1 = solve_full(r1);
+    const Eigen::MatrixXd x = solve_full(r);
+    x0 = x.col(0);
+    x1 = x.col(1);
   }
 
   // The contact displacements A^T (q / dt^2) of x0 and x1, which the event functions read.
@@ -390,102 +396,164 @@ class StepPath {
     if (a_p_[r] != 0.0 && active_in(r, s)) out.emplace_back(2 * nc_, sign * a_p_[r]);
   }
 
-  using VectorXld = Eigen::Matrix<long double, Eigen::Dynamic, 1>;
+  using MatrixXld = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
 
-  // S^-1 y by the factors of S_b and the rows changed since (see set_state), refined
-  // iteratively with residuals y - S z accumulated in extended precision (long double,
-  // 64-bit mantissa on x86-64), so that z is accurate to working precision while
-  // cond(S) eps_double < 1. A hyperstatic sticking set leaves S only regularised by the
-  // compliance, cond(S) ~ 1 / compliance; without it the forces carry errors ~1e-6 F0
+  // S^-1 Y for the columns of Y (a piece's two right-hand sides, x0 and x1, which share each
+  // pass over the factors and over S) by the factors of S_b and the rows changed since (see
+  // set_state), refined iteratively with residuals Y - S Z accumulated in extended precision
+  // (long double, 64-bit mantissa on x86-64), so that Z is accurate to working precision
+  // while cond(S) eps_double < 1. A hyperstatic sticking set leaves S only regularised by
+  // the compliance, cond(S) ~ 1 / compliance; without it the forces carry errors ~1e-6 F0
   // along the set's self-stresses, and the events read from them are inconsistent
   // (docs/probe.md, "Accuracy of the pieces"). Where the componentwise backward error
   //     omega = max_i |S z - y|_i / (|S| |z| + |y|)_i
-  // still exceeds kMaxBackwardError, S is factorised afresh and the solve refined again.
-  Eigen::VectorXd solve_reduced(const VectorXld& y) {
-    Eigen::VectorXd z = updated_solve(y.cast<double>());
-    refine(y, z);
-    if (rows_.empty() || backward_error(y, z) <= kMaxBackwardError) return z;
+  // of a column still exceeds kMaxBackwardError, S is factorised afresh and that column
+  // and the ones after it are solved and refined again (every column is the result of
+  // solving the columns one after the other).
+  Eigen::MatrixXd solve_reduced(const MatrixXld& Y) {
+    const int cols = static_cast<int>(Y.cols());
+    Eigen::MatrixXd Z = updated_solve(Y.cast<double>());
+    refine(Y, Z, 0);
+    if (rows_.empty()) return Z;
+    const Eigen::VectorXd omega = backward_errors(Y, Z);
+    int first = 0;
+    while (first < cols && omega[first] <= kMaxBackwardError) ++first;
+    if (first == cols) return Z;
     if (!factorize()) {
       singular_ = true;
-      return Eigen::VectorXd::Constant(y.size(), std::numeric_limits<double>::quiet_NaN());
+      Z.rightCols(cols - first).setConstant(std::numeric_limits<double>::quiet_NaN());
+      return Z;
     }
-    z = lu_.solve(y.cast<double>());
-    refine(y, z);
-    return z;
+    Z.rightCols(cols - first) = updated_solve(Y.rightCols(cols - first).cast<double>());
+    refine(Y, Z, first);
+    return Z;
   }
 
-  // Up to kRefinements steps z += S^-1 (y - S z), until the correction is below 1e-15 |z|.
-  void refine(const VectorXld& y, Eigen::VectorXd& z) const {
-    for (int step = 0; step < kRefinements; ++step) {
-      const Eigen::VectorXd dz = updated_solve(residual(y, z).cast<double>());
-      z += dz;
-      if (!(dz.lpNorm<Eigen::Infinity>() > 1e-15 * z.lpNorm<Eigen::Infinity>())) break;
+  // Up to kRefinements steps z += S^-1 (y - S z) on the columns from `first` on, each until
+  // its correction is below 1e-15 |z|.
+  void refine(const MatrixXld& Y, Eigen::MatrixXd& Z, int first) const {
+    std::vector<int> cols;
+    for (int c = first; c < Z.cols(); ++c) cols.push_back(c);
+    for (int step = 0; step < kRefinements && !cols.empty(); ++step) {
+      const Eigen::MatrixXd dZ = updated_solve(residual(Y, Z, cols).cast<double>());
+      std::vector<int> going_on;
+      for (std::size_t j = 0; j < cols.size(); ++j) {
+        auto z = Z.col(cols[j]);
+        z += dZ.col(static_cast<Eigen::Index>(j));
+        if (dZ.col(static_cast<Eigen::Index>(j)).lpNorm<Eigen::Infinity>() > 1e-15 * z.lpNorm<Eigen::Infinity>())
+          going_on.push_back(cols[j]);
+      }
+      cols = std::move(going_on);
     }
   }
 
-  // z = S^-1 y by Woodbury's formula on the factors of S_b.
-  Eigen::VectorXd updated_solve(const Eigen::VectorXd& y) const {
-    Eigen::VectorXd z = lu_.solve(y);
+  // S^-1 Y by Woodbury's formula on the factors of S_b (one pass of KLU for all columns).
+  Eigen::MatrixXd updated_solve(Eigen::MatrixXd Z) const {
+    lu_.solve_in_place(Z);
     const int m = static_cast<int>(rows_.size());
-    if (m == 0) return z;
-    Eigen::VectorXd t = Eigen::VectorXd::Zero(m);
-    for (int i = 0; i < m; ++i)
-      for (const auto& [col, v] : D_[i]) t[i] += v * z[col];
-    z.noalias() -= Z_.leftCols(m) * capacitance_.solve(t);
-    return z;
+    if (m == 0) return Z;
+    for (Eigen::Index c = 0; c < Z.cols(); ++c) {
+      Eigen::VectorXd t = Eigen::VectorXd::Zero(m);
+      for (int i = 0; i < m; ++i)
+        for (const auto& [col, v] : D_[i]) t[i] += v * Z(col, c);
+      Z.col(c).noalias() -= Z_.leftCols(m) * capacitance_.solve(t);
+    }
+    return Z;
   }
 
-  // The residual y - S z, accumulated in long double.
-  VectorXld residual(const VectorXld& y, const Eigen::VectorXd& z) const {
-    VectorXld r = y;
-    for (int j = 0; j < S_.outerSize(); ++j)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(S_, j); it; ++it)
-        r[it.row()] -= static_cast<long double>(it.value()) * z[j];
-    for (std::size_t i = 0; i < rows_.size(); ++i)
-      for (const auto& [col, v] : D_[i]) r[rows_[i]] -= static_cast<long double>(v) * z[col];
-    return r;
+  // The residuals Y - S Z of the columns `cols` (at most two), accumulated in long double:
+  // row by row (S_rows_), each sum held in an extended-precision register.
+  MatrixXld residual(const MatrixXld& Y, const Eigen::MatrixXd& Z, const std::vector<int>& cols) const {
+    const int nr = static_cast<int>(cols.size());
+    if (nr < 1 || nr > 2) throw Error("cd path: residual of " + std::to_string(nr) + " columns");
+    MatrixXld R(Y.rows(), nr);
+    const int* start = S_rows_.outerIndexPtr();
+    const int* col = S_rows_.innerIndexPtr();
+    const double* value = S_rows_.valuePtr();
+    const double* z0 = Z.col(cols[0]).data();
+    if (nr == 1) {
+      for (int i = 0; i < S_rows_.outerSize(); ++i) {
+        long double s0 = Y(i, cols[0]);
+        for (int e = start[i]; e < start[i + 1]; ++e) s0 -= static_cast<long double>(value[e]) * z0[col[e]];
+        R(i, 0) = s0;
+      }
+    } else {
+      const double* z1 = Z.col(cols[1]).data();
+      for (int i = 0; i < S_rows_.outerSize(); ++i) {
+        long double s0 = Y(i, cols[0]), s1 = Y(i, cols[1]);
+        for (int e = start[i]; e < start[i + 1]; ++e) {
+          const long double v = value[e];
+          s0 -= v * z0[col[e]];
+          s1 -= v * z1[col[e]];
+        }
+        R(i, 0) = s0;
+        R(i, 1) = s1;
+      }
+    }
+    for (int j = 0; j < nr; ++j)
+      for (std::size_t i = 0; i < rows_.size(); ++i)
+        for (const auto& [col, v] : D_[i]) R(rows_[i], j) -= static_cast<long double>(v) * Z(col, cols[j]);
+    return R;
   }
 
-  // omega of z (see solve_reduced).
-  double backward_error(const VectorXld& y, const Eigen::VectorXd& z) const {
-    const Eigen::VectorXd r = residual(y, z).cast<double>();
-    Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + y.cast<double>().cwiseAbs();
-    // |S| of a changed row: its entries in the present state (D holds the present entries
-    // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
-    for (std::size_t i = 0; i < rows_.size(); ++i)
-      for (const auto& [col, v] : D_[i]) scale[rows_[i]] += std::abs(v * z[col]);
-    double omega = 0.0;
-    for (Eigen::Index i = 0; i < r.size(); ++i)
-      if (scale[i] > 0.0) omega = std::max(omega, std::abs(r[i]) / scale[i]);
-      else if (r[i] != 0.0) omega = std::numeric_limits<double>::infinity();
+  // omega of each column of Z (see solve_reduced).
+  Eigen::VectorXd backward_errors(const MatrixXld& Y, const Eigen::MatrixXd& Z) const {
+    std::vector<int> cols;
+    for (int c = 0; c < Z.cols(); ++c) cols.push_back(c);
+    const Eigen::MatrixXd R = residual(Y, Z, cols).cast<double>();
+    Eigen::VectorXd omega = Eigen::VectorXd::Zero(Z.cols());
+    for (Eigen::Index c = 0; c < Z.cols(); ++c) {
+      const auto z = Z.col(c);
+      Eigen::VectorXd scale = S_abs_ * z.cwiseAbs() + Y.col(c).cast<double>().cwiseAbs();
+      // |S| of a changed row: its entries in the present state (D holds the present entries
+      // and the negated ones of S_b; |S_b| |z| over-counts the latter, which only loosens omega).
+      for (std::size_t i = 0; i < rows_.size(); ++i)
+        for (const auto& [col, v] : D_[i]) scale[rows_[i]] += std::abs(v * z[col]);
+      for (Eigen::Index i = 0; i < R.rows(); ++i)
+        if (scale[i] > 0.0) omega[c] = std::max(omega[c], std::abs(R(i, c)) / scale[i]);
+        else if (R(i, c) != 0.0) omega[c] = std::numeric_limits<double>::infinity();
+    }
     return omega;
   }
 
-  // The full system K x = r, x = (v, f), by the reduced one: v_G = M_G^-1 (r_G + A_G f),
-  // so a kinematic row a_r^T v + (D f)_r = r_r reads (a_r^T M_G^-1 A_G + D) f + a_pr v_p =
-  // r_r - a_r^T M_G^-1 r_G, and the pressure row m_p v_p - a_p^T f = r_p stays as it is.
-  Eigen::VectorXd solve_full(const Eigen::VectorXd& r) {
-    const int p = n_ - 1;
-    // y in extended precision: a_r^T M_G^-1 r_G is of the order of the loads (F0 / m),
+  // The full system K x = r, x = (v, f), for each column r of R, by the reduced one:
+  // v_G = M_G^-1 (r_G + A_G f), so a kinematic row a_r^T v + (D f)_r = r_r reads
+  // (a_r^T M_G^-1 A_G + D) f + a_pr v_p = r_r - a_r^T M_G^-1 r_G, and the pressure row
+  // m_p v_p - a_p^T f = r_p stays as it is.
+  Eigen::MatrixXd solve_full(const Eigen::MatrixXd& R) {
+    const int p = n_ - 1, cols = static_cast<int>(R.cols());
+    // Y in extended precision: a_r^T M_G^-1 r_G is of the order of the loads (F0 / m),
     // the kinematic terms of g / dt^2; rounded to double, the difference would carry an
     // error that S^-1 amplifies by cond(S) (see solve_reduced).
-    VectorXld t(n_);  // M_G^-1 r_G; the pressure row's entry is not eliminated
-    for (int i = 0; i < n_; ++i) t[i] = static_cast<long double>(pb_.inverse_mass[i]) * r[i];
-    t[p] = 0.0L;
-    VectorXld y = VectorXld::Zero(2 * nc_ + 1);
+    MatrixXld T(n_, cols);  // M_G^-1 r_G; the pressure row's entry is not eliminated
+    for (int c = 0; c < cols; ++c) {
+      for (int i = 0; i < n_; ++i) T(i, c) = static_cast<long double>(pb_.inverse_mass[i]) * R(i, c);
+      T(p, c) = 0.0L;
+    }
+    MatrixXld Y = MatrixXld::Zero(2 * nc_ + 1, cols);
     const Eigen::SparseMatrix<double>& A = pb_.system.A;
-    for (int j = 0; j < A.outerSize(); ++j)
-      if (active(j))
+    for (int j = 0; j < A.outerSize(); ++j) {
+      if (!active(j)) continue;
+      for (int c = 0; c < cols; ++c) {
+        long double sum = 0.0L;
         for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
-          y[j] -= static_cast<long double>(it.value()) * t[it.row()];
-    for (int i = 0; i < 2 * nc_; ++i) y[i] += r[n_ + i];
-    y[2 * nc_] = r[p];
-    const Eigen::VectorXd z = solve_reduced(y);
-    Eigen::VectorXd x(n_ + 2 * nc_);
-    x.tail(2 * nc_) = z.head(2 * nc_);
-    x.head(n_) = pb_.inverse_mass.cwiseProduct(r.head(n_) + A * z.head(2 * nc_));
-    x[p] = z[2 * nc_];
-    return x;
+          sum -= static_cast<long double>(it.value()) * T(it.row(), c);
+        Y(j, c) = sum;
+      }
+    }
+    for (int c = 0; c < cols; ++c) {
+      for (int i = 0; i < 2 * nc_; ++i) Y(i, c) += R(n_ + i, c);
+      Y(2 * nc_, c) = R(p, c);
+    }
+    const Eigen::MatrixXd Z = solve_reduced(Y);
+    Eigen::MatrixXd X(n_ + 2 * nc_, cols);
+    for (int c = 0; c < cols; ++c) {
+      const Eigen::VectorXd f = Z.col(c).head(2 * nc_);
+      X.col(c).tail(2 * nc_) = f;
+      X.col(c).head(n_) = pb_.inverse_mass.cwiseProduct(R.col(c).head(n_) + A * f);
+      X(p, c) = Z(2 * nc_, c);
+    }
+    return X;
   }
 
   std::size_t max_updated_rows_;
@@ -514,6 +582,8 @@ class StepPath {
   Eigen::PartialPivLU<Eigen::MatrixXd> capacitance_;
   int stats_factorizations_ = 0;
   bool singular_ = false;
+  using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  RowMatrix S_rows_;                   // S_b by rows (the residual's sums)
   Eigen::SparseMatrix<double> S_abs_;  // |S_b|, entrywise
   static constexpr double kMaxBackwardError = 1e-14;
   static constexpr int kRefinements = 2;  // extended-precision refinement steps per solve
