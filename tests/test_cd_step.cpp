@@ -333,6 +333,9 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   CdPathSettings bad = restarted;
   bad.restart_divisor = 1.0;
   EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, bad), Error);
+  CdPathSettings negative = restarted;
+  negative.lowering_retries = -1;
+  EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, negative), Error);
 }
 
 TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {

@@ -760,10 +760,8 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   };
 
   // The compliance lowered to `rigid` (CdPathStart::compliant; nothing to do otherwise). A
-  // lowering whose proximal path fails (a cycle at a degenerate point) is taken again from
-  // the latest solution with the factor's square root (a smaller step), up to
-  // kMaxLoweringRetries times in a row.
-  constexpr int kMaxLoweringRetries = 4;
+  // lowering whose proximal path fails is taken again from the latest solution with the
+  // factor's square root (a smaller step), up to ps.lowering_retries times in a row.
   const double kappa_rigid = kappa_of(rigid);
   double factor = ps.compliance_factor;
   int failed = 0;
@@ -779,7 +777,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
       failed = 0;
       factor = ps.compliance_factor;
       keep_if_better(f_latest);
-    } else if (factorized && ++failed <= kMaxLoweringRetries) {
+    } else if (factorized && ++failed <= ps.lowering_retries) {
       path.restore(held);
       factor = std::sqrt(factor);
     } else {  // the lowering stops here (probe_cd_path restarts below it)
@@ -853,6 +851,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   const bool soft = ps.start == CdPathStart::compliant && ps.compliant_start > ps.compliance;
   if (soft && !(ps.restart_divisor > 1.0))
     throw Error("cd path: restart_divisor must be > 1 (got " + std::to_string(ps.restart_divisor) + ")");
+  if (soft && ps.lowering_retries < 0)
+    throw Error("cd path: lowering_retries must be >= 0 (got " + std::to_string(ps.lowering_retries) + ")");
   CdStepSolution best;
   CdPathStats best_stats;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};

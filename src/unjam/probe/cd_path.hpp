@@ -65,8 +65,11 @@ struct CdPathSettings {
   // to `compliance`; where the lowering stops at a compliance c (the solution it follows
   // ends there), the path is followed afresh from the static network at c / restart_divisor,
   // up to max_restarts times (docs/probe.md, "Where the path starts").
+  // A lowering whose proximal path fails is retried from the latest solution with the
+  // factor's square root, up to lowering_retries times in a row, before the restart.
   double compliant_start = 0.1;
   double compliance_factor = 0.5;
+  int lowering_retries = 4;
   double restart_divisor = 10.0;
   int max_restarts = 6;
 };
