@@ -405,7 +405,16 @@ TEST(ProbeCampaign, CancelledProbeLeavesNoRowAndResumesToTheSameBytes) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("unjam-cancel-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const int threads = omp_get_max_threads();
+  // One thread (the polls in a fixed order), and the thread count and directory put back
+  // however the test ends.
+  struct Restore {
+    int threads = omp_get_max_threads();
+    std::filesystem::path dir;
+    ~Restore() {
+      omp_set_num_threads(threads);
+      std::filesystem::remove_all(dir);
+    }
+  } restore{omp_get_max_threads(), dir};
   omp_set_num_threads(1);
   CheckpointedCampaignOptions opt;
   opt.settings = to_json(s);
@@ -446,8 +455,6 @@ TEST(ProbeCampaign, CancelledProbeLeavesNoRowAndResumesToTheSameBytes) {
   EXPECT_TRUE(run("part.json", none, nullptr, resumed));
   EXPECT_EQ(campaign_checkpoint_text(opt.fingerprint, opt.settings, resumed),
             campaign_checkpoint_text(opt.fingerprint, opt.settings, whole));
-  omp_set_num_threads(threads);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
