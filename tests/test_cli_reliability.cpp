@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <random>
 #include <string>
 #include <thread>
@@ -66,6 +67,12 @@ int rows_of(const fs::path& csv) {
   int n = 0;
   for (std::string line; std::getline(in, line);) n += !line.empty();
   return n - 1;  // without the header
+}
+
+// The text of `file`, empty if it cannot be read (yet).
+std::string read_file_or_empty(const fs::path& file) {
+  std::ifstream in(file);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 // A checkpoint of `probe DIR --all`, as saved after a probe (the run is killed then).
@@ -293,6 +300,67 @@ TEST_F(CliReliability, ExitCodesOfEverySubcommand) {
   EXPECT_EQ(cd.exit_code, 1) << cd.output;
   EXPECT_NE(cd.output.find("did not converge (method cd, no solution)"), std::string::npos) << cd.output;
   EXPECT_EQ(cd.output.find("179769"), std::string::npos) << cd.output;
+}
+
+// Whether process `pid` catches `sig` (its handler installed): /proc/PID/status, SigCgt.
+bool catches(pid_t pid, int sig) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind("SigCgt:", 0) == 0) return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1ULL;
+  return false;
+}
+
+// SIGTERM in the middle of a long probe (nlgs, 6e5 sweeps that do not converge: seconds of
+// compute): the probe is abandoned at once, the run exits with the interrupt code 3 leaving a
+// checkpoint without it, and the same command again probes it: the probes.csv of an
+// uninterrupted run. (Were the probe finished instead, the run would end with code 0.)
+TEST_F(CliReliability, SigtermAbandonsTheRunningProbeAndTheSameCommandRedoesIt) {
+  const fs::path d = copy("p50-mu0.1", "d");
+  const std::string args = "probe " + d.string() +
+                           " --sample 1 --seed 3 --method nlgs --velocity-tol 1e-14 --max-sweeps 600000 "
+                           "--threads 1 --checkpoint 0 --out ";
+  const fs::path whole = root_ / "whole", out = root_ / "out";
+  fs::create_directories(whole);
+  const ToolRun uninterrupted = run_tool(args + whole.string());
+  ASSERT_EQ(uninterrupted.exit_code, 0) << uninterrupted.output;
+
+  // The run, its output in a file: SIGTERM once it has announced the campaign and catches
+  // SIGTERM, a little later: inside the probe.
+  fs::create_directories(out);
+  const fs::path log = root_ / "log.txt";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c",
+            ("exec '" + std::string(UNJAM_BINARY) + "' " + args + out.string() + " >'" + log.string() + "' 2>&1").c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  const auto started = std::chrono::steady_clock::now();
+  while ((read_file_or_empty(log).find("unjam probe:") == std::string::npos || !catches(pid, SIGTERM)) &&
+         std::chrono::steady_clock::now() - started < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  const auto signalled = std::chrono::steady_clock::now();
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  const std::string output = read_file_or_empty(log);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 3) << output;
+  EXPECT_LT(stop_s, 10.0) << "the stop waited for the probe";
+  EXPECT_NE(output.find("stopped after 0 probes"), std::string::npos) << output;
+  EXPECT_FALSE(fs::exists(out / "probes.csv"));
+  ASSERT_TRUE(fs::exists(out / "probe_checkpoint.json"));
+  EXPECT_EQ(nlohmann::json::parse(read_file(out / "probe_checkpoint.json")).at("state").at("rows").size(), 0u);
+
+  const ToolRun resumed = run_tool(args + out.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming: 0 probes already done"), std::string::npos) << resumed.output;
+  EXPECT_FALSE(fs::exists(out / "probe_checkpoint.json"));
+  EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
+  EXPECT_EQ(read_file(out / "response_profile.csv"), read_file(whole / "response_profile.csv"));
 }
 
 TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {

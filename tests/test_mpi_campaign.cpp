@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <thread>
@@ -179,6 +180,63 @@ TEST_F(Distributed, ProbeKilledOnTwoRanksResumesOnThree) {
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   EXPECT_NE(resumed.output.find("resuming: " + std::to_string(done)), std::string::npos) << resumed.output;
   expect_same_probe_outputs(one, out);
+}
+
+// SIGTERM to mpirun while every rank is inside a long probe (nlgs, 1.5e6 sweeps that do not
+// converge: seconds each). Open MPI 4.1's mpirun passes SIGTERM on to the ranks (about 2 s
+// later) and SIGKILLs them a little after: each rank abandons its probe at once, and rank 0
+// saves the checkpoint (without the abandoned probes) before the job is gone. (Waiting for the
+// probes instead, the ranks were killed first and nothing was saved.) The same command again,
+// here in one process, gives the bytes of an uninterrupted run.
+TEST_F(Distributed, ProbeSigtermOfMpirunAbandonsTheRunningProbesAndResumes) {
+  const std::string args = "probe '" + kP50.string() +
+                           "' --sample 2 --seed 3 --method nlgs --velocity-tol 1e-14 --max-sweeps 1500000 "
+                           "--checkpoint 0 --out '";
+  const fs::path one = root_ / "one", out = root_ / "stopped", log = root_ / "log.txt";
+  fs::create_directories(one);
+  fs::create_directories(out);
+  const CommandResult whole = shell(unjam(0, args + one.string() + "' --threads 2"));
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+
+  const std::string job = "exec env " + unjam(2, args + out.string() + "' --threads 1") + " >'" + log.string() + "' 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
+  posix_spawnattr_t attr;
+  ASSERT_EQ(::posix_spawnattr_init(&attr), 0);
+  ASSERT_EQ(::posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSID), 0);
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, &attr, const_cast<char**>(argv), environ), 0);
+  ::posix_spawnattr_destroy(&attr);
+  const auto text = [&] {
+    std::ifstream in(log);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const auto started = std::chrono::steady_clock::now();
+  while (text().find("unjam probe:") == std::string::npos && std::chrono::steady_clock::now() - started < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // every rank in its probe
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);  // pid: mpirun (sh and env exec it)
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (auto alive = session_processes(pid); !alive.empty() && std::chrono::steady_clock::now() < deadline + std::chrono::seconds(5);
+       alive = session_processes(pid)) {
+    for (const pid_t p : alive) ::kill(p, SIGKILL);
+    ::waitpid(pid, nullptr, WNOHANG);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const std::string output = text();
+  ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "the job did not end after SIGTERM\n" << output;
+  EXPECT_NE(output.find("unjam: interrupted: stopped after"), std::string::npos) << output;
+  ASSERT_FALSE(fs::exists(out / "probes.csv")) << output;
+  ASSERT_TRUE(fs::exists(out / "probe_checkpoint.json")) << output;
+  EXPECT_LT(checkpointed_rows(out), 2u);
+
+  const CommandResult resumed = shell(unjam(0, args + out.string() + "' --threads 2"));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming: "), std::string::npos) << resumed.output;
+  for (const char* f : {"probes.csv", "response_profile.csv", "response_field.csv"})
+    EXPECT_EQ(read_file(out / f), read_file(one / f)) << f;
 }
 
 TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {

@@ -5,9 +5,15 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <string>
+#include <unistd.h>
 #include <utility>
+#include <vector>
 
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
@@ -15,6 +21,7 @@
 #include "unjam/lp/force_lp.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
+#include "unjam/probe/campaign_run.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
@@ -315,6 +322,139 @@ TEST(ProbeCampaign, SummaryRatioOfMeans) {
   const CampaignSummary empty = summarize(p, st, FitWindow{1.0, 1.1});
   EXPECT_FALSE(empty.has_fit);
   EXPECT_NE(empty.fit_error.find("need at least 2"), std::string::npos) << empty.fit_error;
+}
+
+// A cancel predicate that returns true from its `fire`-th call on (0: never), counting its
+// calls; thread safe.
+struct CountingCancel {
+  long long fire = 0;
+  std::atomic<long long> calls{0};
+  std::function<bool()> predicate() {
+    return [this] { return ++calls >= fire && fire > 0; };
+  }
+};
+
+TEST(Probe, NlgsProbeIsAbandonedOnceItsCancelTurnsTrue) {
+  // A probe that would run its 1e7 sweeps (velocity_tol far below reach): the cancel is polled
+  // every 16 sweeps and the probe throws at the poll where it turns true, polling no more.
+  const Packing& p = fixture_p50();
+  ProbeSettings s;
+  s.model = p.meta.contact;
+  s.velocity_tol = 1e-14;
+  CountingCancel cancel;
+  cancel.fire = 5;
+  s.cancel = cancel.predicate();
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(probe_nlgs(p, 3, s), Cancelled);
+  EXPECT_EQ(cancel.calls.load(), 5);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+  // A cancel that never holds changes nothing.
+  ProbeSettings plain;
+  plain.model = p.meta.contact;
+  plain.max_sweeps = 30000;
+  ProbeSettings polled = plain;
+  CountingCancel never;
+  polled.cancel = never.predicate();
+  const ProbeResult a = probe_nlgs(p, 3, plain), b = probe_nlgs(p, 3, polled);
+  EXPECT_GT(never.calls.load(), a.sweeps / 16 - 2);
+  EXPECT_EQ(a.f_crit, b.f_crit);
+  EXPECT_EQ(a.sweeps, b.sweeps);
+  EXPECT_EQ(a.residual, b.residual);
+  EXPECT_TRUE(a.u == b.u);
+}
+
+TEST(Probe, CdPathIsAbandonedOnceItsCancelTurnsTrue) {
+  // The exact path polls before every piece: a cancel that turns true at the third poll
+  // stops it there, whatever the start (static network, compliant continuation).
+  const Packing& p = fixture_p50();
+  for (const CdPathStart start : {CdPathStart::static_network, CdPathStart::compliant}) {
+    CdPathSettings path;
+    path.start = start;
+    for (int k = 0; k < 4; ++k) {
+      SCOPED_TRACE("contact " + std::to_string(k) + ", start " + cd_start_name(start));
+      ProbeSettings s;
+      CountingCancel never;
+      s.cancel = never.predicate();
+      CdPathStats stats;
+      const CdStepSolution whole = probe_cd_path(p, k, s, path, &stats);
+      const CdStepSolution plain = probe_cd_path(p, k, ProbeSettings{}, path);
+      EXPECT_TRUE(whole.f == plain.f);  // polling changes nothing
+      EXPECT_EQ(whole.result.f_crit, plain.result.f_crit);
+      ASSERT_GE(never.calls.load(), stats.pieces);
+      if (never.calls.load() < 3) continue;
+      CountingCancel cancel;
+      cancel.fire = 3;
+      s.cancel = cancel.predicate();
+      EXPECT_THROW(probe_cd_path(p, k, s, path), Cancelled);
+      EXPECT_EQ(cancel.calls.load(), 3);
+    }
+  }
+}
+
+TEST(ProbeCampaign, CancelledProbeLeavesNoRowAndResumesToTheSameBytes) {
+  // --method cd on 8 contacts of the fixture, one thread. The interrupt (polled by the probes
+  // as their cancel, and before probes are handed out) turns true in the middle of the 4th
+  // probe: the run stops, the checkpoint holds the 3 finished probes only, and the resumed
+  // run probes the other 5 to the checkpoint bytes of an uninterrupted run.
+  const Packing& p = fixture_p50();
+  CampaignSettings s = campaign_settings_for(p);
+  s.method = ProbeMethod::kCd;
+  s.sample = 8;
+  const std::vector<int> targets = campaign_targets(p, s);
+  ASSERT_EQ(targets.size(), 8u);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("unjam-cancel-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  // One thread (the polls in a fixed order), and the thread count and directory put back
+  // however the test ends.
+  struct Restore {
+    int threads = omp_get_max_threads();
+    std::filesystem::path dir;
+    ~Restore() {
+      omp_set_num_threads(threads);
+      std::filesystem::remove_all(dir);
+    }
+  } restore{omp_get_max_threads(), dir};
+  omp_set_num_threads(1);
+  CheckpointedCampaignOptions opt;
+  opt.settings = to_json(s);
+  opt.fingerprint = packing_fingerprint(p);
+  opt.checkpoint_s = 1e9;
+  const auto run = [&](const std::string& name, CountingCancel& cancel, std::vector<long long>* calls_at,
+                       CampaignState& state) {
+    CheckpointedCampaignOptions o = opt;
+    o.checkpoint = dir / name;
+    o.interrupted = cancel.predicate();
+    if (calls_at) o.progress = [&](int, int, double, double) { calls_at->push_back(cancel.calls.load()); };
+    LocalDistributor local;
+    return run_checkpointed_campaign(p, s, state, local, o).finished;
+  };
+  // Uninterrupted, counting the polls up to the end of each probe.
+  CountingCancel never;
+  std::vector<long long> calls_at;
+  CampaignState whole = empty_campaign_state(p);
+  ASSERT_TRUE(run("whole.json", never, &calls_at, whole));
+  ASSERT_EQ(calls_at.size(), 8u);
+  // Between two probes: 3 polls (the checkpoint hook's, the hand-out's should_stop and cancel),
+  // then those of the probe itself.
+  ASSERT_GE(calls_at[3] - calls_at[2], 6) << "the 4th probe polls too few times to be cancelled inside";
+  // Interrupted in the middle of the 4th probe.
+  CountingCancel cancel;
+  cancel.fire = calls_at[2] + 4 + (calls_at[3] - calls_at[2] - 4) / 2;
+  CampaignState part = empty_campaign_state(p);
+  EXPECT_FALSE(run("part.json", cancel, nullptr, part));
+  ASSERT_EQ(part.rows.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(part.rows[i].contact, targets[i]);
+  EXPECT_FALSE(part.average.has_probe(targets[3]));
+  const SavedCampaign saved = load_campaign_checkpoint(dir / "part.json", p, opt.settings);
+  ASSERT_TRUE(saved.state.has_value());
+  EXPECT_EQ(to_json(*saved.state).dump(), to_json(part).dump());
+  // Resumed from the checkpoint: the bytes of the uninterrupted run.
+  CampaignState resumed = *saved.state;
+  CountingCancel none;
+  EXPECT_TRUE(run("part.json", none, nullptr, resumed));
+  EXPECT_EQ(campaign_checkpoint_text(opt.fingerprint, opt.settings, resumed),
+            campaign_checkpoint_text(opt.fingerprint, opt.settings, whole));
 }
 
 }  // namespace

@@ -227,6 +227,9 @@ def interrupted(code):
     ("p = unjam.pack(n=150, seed=3, threads=1)", "unjam.bounds(p, threads=2)"),
     # probe(contacts=[...]): 1640 probes (~5 s of CPU), stopped between batches
     (f"p = unjam.read_packing({FIXTURE!r})", "unjam.probe(p, contacts=list(range(82)) * 20, threads=2)"),
+    # one nlgs probe of 1e7 sweeps (~30 s of CPU), abandoned inside (ProbeSettings::cancel)
+    (f"p = unjam.read_packing({FIXTURE!r})",
+     "unjam.probe(p, contact=3, method='nlgs', velocity_tol=1e-14, max_sweeps=10000000, threads=1)"),
 ])
 def test_ctrl_c_stops_a_long_call(setup, call):
     seconds, rc, out, err = interrupted(

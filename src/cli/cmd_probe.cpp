@@ -181,6 +181,7 @@ void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& di
   CampaignState unused = empty_campaign_state(p);
   CampaignHooks hooks;
   hooks.should_stop = InterruptGuard::requested;
+  hooks.cancel = InterruptGuard::requested;  // this rank's own signal (mpirun forwards SIGTERM to every rank)
   const InterruptGuard interrupts;
   run_campaign(p, s, unused, hooks, dist);
 }

@@ -3,7 +3,8 @@
 // and the Ctrl-C poll of the long calls. Long calls release the GIL; while they run,
 // SignalPoll lets Python's signal handlers run now and then, and a KeyboardInterrupt stops
 // the call at the library's next stop point (CompactionHooks, ForceBoundsOptions::should_stop,
-// between probes).
+// ProbeSettings::cancel inside the running probes).
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -18,7 +19,8 @@ void bind_compute(py::module_& m);
 
 // A should_stop hook: from the calling thread only, at most every 0.1 s, it takes the GIL
 // and runs PyErr_CheckSignals; after a KeyboardInterrupt (or any error a handler raised)
-// it answers true, leaving the Python error set for rethrow_if_interrupted().
+// it answers true, leaving the Python error set for rethrow_if_interrupted(). Thread safe:
+// other threads (the probes of the call's OpenMP team) get the answer of the last check.
 class SignalPoll {
  public:
   bool operator()();
@@ -29,7 +31,7 @@ class SignalPoll {
  private:
   std::thread::id owner_ = std::this_thread::get_id();
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-  bool interrupted_ = false;
+  std::atomic<bool> interrupted_{false};
 };
 
 // Sets the OpenMP thread count of the calling thread for one call (0: leave it), and puts

@@ -136,16 +136,18 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   return s;
 }
 
-// probe_contacts (in parallel, Ctrl-C checked between batches): a ProbeResult for contact=K,
-// a list in the order of contacts=[...].
+// probe_contacts (in parallel; Ctrl-C checked between probes and, by the calling thread's
+// probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
+// in the order of contacts=[...].
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, double dt, double velocity_tol, long long max_sweeps,
                  int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  const CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
   std::vector<ProbeResult> results;
   SignalPoll poll;
+  s.nlgs.cancel = [&poll] { return poll(); };
   {
     py::gil_scoped_release release;
     const ThreadCount count(threads);

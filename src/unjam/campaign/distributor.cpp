@@ -68,12 +68,14 @@ void start_mpi() {
 int request_tag(int round) { return 100 + 2 * round; }
 int reply_tag(int round) { return 101 + 2 * round; }
 
-// A worker's message: its want (tasks; -1: it leaves the loop), its load, its results.
+// A worker's message: its want (tasks; -1: it leaves the loop), its load, its results
+// (cancelled ones flagged: rank 0 counts them as not done).
 std::string encode_request(int want, const RankLoad& load, const std::vector<TaskResult>& results) {
   ByteWriter w;
   w.put<std::int32_t>(want).put<std::int32_t>(load.threads).put<double>(load.busy_seconds);
   w.put<std::uint64_t>(results.size());
-  for (const TaskResult& r : results) w.put<std::int32_t>(r.task).put_array(r.bytes.data(), r.bytes.size());
+  for (const TaskResult& r : results)
+    w.put<std::int32_t>(r.task).put<std::uint8_t>(r.cancelled).put_array(r.bytes.data(), r.bytes.size());
   return w.take();
 }
 
@@ -112,7 +114,8 @@ void send(const std::string& bytes, int dest, int tag) {
 }
 
 // A worker's threads: each take sends the results put since the last one and asks rank 0
-// for tasks (one thread at a time on the wire: MPI_THREAD_SERIALIZED).
+// for tasks (one thread at a time on the wire: MPI_THREAD_SERIALIZED). Cancelled results
+// travel too, so that rank 0 knows those tasks are not done.
 class WorkerSource : public WorkSource {
  public:
   WorkerSource(const WorkLoop& loop, RankLoad& load, int round) : loop_(loop), load_(load), round_(round) {}
@@ -133,7 +136,8 @@ class WorkerSource : public WorkSource {
   }
   void put(std::vector<TaskResult> results) override {
     const std::lock_guard lock(mutex_);
-    clock_.put(load_, results.size());
+    clock_.put(load_, static_cast<std::size_t>(std::count_if(results.begin(), results.end(),
+                                                             [](const TaskResult& r) { return !r.cancelled; })));
     for (TaskResult& r : results) pending_.push_back(std::move(r));
   }
   // After every thread is done: the last results, and this rank leaves the loop.
@@ -187,7 +191,7 @@ class MpiDistributor : public WorkDistributor {
         abort_job(e);  // the server thread cannot be joined while workers still ask
       }
       server.join();
-      return queue.exhausted();
+      return queue.finished();
     } catch (const std::exception& e) {
       abort_job(e);
     }
@@ -210,12 +214,14 @@ class MpiDistributor : public WorkDistributor {
         std::vector<TaskResult> results(r.get<std::uint64_t>());
         for (TaskResult& res : results) {
           res.task = r.get<std::int32_t>();
+          res.cancelled = r.get<std::uint8_t>() != 0;
           const std::vector<char> bytes = r.get_array<char>();
           res.bytes.assign(bytes.begin(), bytes.end());
         }
         std::vector<int> tasks;
         {
           const std::lock_guard lock(mutex);
+          queue.cancelled(drop_cancelled(results));
           load.tasks += static_cast<long long>(results.size());
           if (!results.empty()) loop.gather(results);
           if (want >= 0) tasks = queue.next(want);

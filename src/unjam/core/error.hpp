@@ -19,4 +19,12 @@ class Interrupted : public Error {
   explicit Interrupted(const std::string& what) : Error(what) {}
 };
 
+// A computation abandoned on request: a long one (a probe) polls a cancel predicate at cheap
+// points and throws this once the predicate returns true. It has no result; a campaign
+// reports the task as not done (TaskResult::cancelled) and a resumed run computes it again.
+class Cancelled : public Interrupted {
+ public:
+  Cancelled() : Interrupted("cancelled on request") {}
+};
+
 }  // namespace unjam

@@ -1,5 +1,7 @@
 #include "unjam/core/work_source.hpp"
 
+#include <algorithm>
+
 namespace unjam {
 
 std::vector<int> TaskQueue::next(int max) {
@@ -11,6 +13,13 @@ std::vector<int> TaskQueue::next(int max) {
     out.push_back(t);
   }
   return out;
+}
+
+std::size_t drop_cancelled(std::vector<TaskResult>& results) {
+  const auto kept = std::remove_if(results.begin(), results.end(), [](const TaskResult& r) { return r.cancelled; });
+  const auto n = static_cast<std::size_t>(results.end() - kept);
+  results.erase(kept, results.end());
+  return n;
 }
 
 namespace {
@@ -33,8 +42,9 @@ std::vector<int> QueueSource::take(int max) {
 
 void QueueSource::put(std::vector<TaskResult> results) {
   const std::lock_guard lock(mutex_);
+  queue_.cancelled(drop_cancelled(results));
   clock_.put(load_, results.size());
-  loop_.gather(results);
+  if (!results.empty()) loop_.gather(results);
 }
 
 LocalDistributor::LocalDistributor(int shard, int shards) : shard_(shard), shards_(shards) {
@@ -52,7 +62,7 @@ bool LocalDistributor::run(const std::vector<int>& tasks, const WorkLoop& loop) 
   std::mutex mutex;
   QueueSource source(queue, loop, load_, mutex);
   loop.work(source);
-  return queue.exhausted();
+  return queue.finished();
 }
 
 }  // namespace unjam

@@ -9,6 +9,10 @@
 //   loop.gather(results): called on the gathering process only, one call at a time, with the
 //     results of one put of any process.
 //
+// A task whose compute was abandoned (it threw Cancelled, unjam/core/error.hpp) comes back as
+// TaskResult::cancelled: it is not gathered and not counted as done, and run() then reports
+// the loop as not finished (a resumed run computes the task again).
+//
 // A result is a byte string (ByteWriter / ByteReader), so that it can travel between
 // processes. Gathering must not depend on the order in which results arrive; callers keep
 // results sorted by task and use exact (fixed-point) sums, so the outputs are the same bytes
@@ -33,7 +37,12 @@ namespace unjam {
 struct TaskResult {
   int task = -1;
   std::string bytes;
+  bool cancelled = false;  // abandoned (no bytes): dropped before gather, the loop not finished
 };
+
+// Removes the cancelled results of `results` (keeping the order of the others); returns how
+// many there were.
+std::size_t drop_cancelled(std::vector<TaskResult>& results);
 
 // This process's side of a loop: thread safe.
 class WorkSource {
@@ -41,13 +50,14 @@ class WorkSource {
   virtual ~WorkSource() = default;
   // Up to `max` tasks for the calling thread; empty when none is left (or the loop stops).
   virtual std::vector<int> take(int max) = 0;
-  // The results of tasks this thread took (it times the compute between take and put).
+  // The results of tasks this thread took (it times the compute between take and put),
+  // cancelled ones included.
   virtual void put(std::vector<TaskResult> results) = 0;
 };
 
 struct WorkLoop {
   std::function<void(WorkSource&)> work;                 // every process
-  std::function<void(std::vector<TaskResult>&)> gather;  // gathering process
+  std::function<void(std::vector<TaskResult>&)> gather;  // gathering process, finished tasks only
   // Gathering process: called once per task as it comes up to be handed out; true drops it
   // (the caller settles it without a result). May be empty.
   std::function<bool(int task)> skip;
@@ -59,7 +69,7 @@ struct WorkLoop {
 struct RankLoad {
   int rank = 0;
   int threads = 1;
-  long long tasks = 0;
+  long long tasks = 0;  // finished (not cancelled)
   double busy_seconds = 0.0;  // summed over threads, from take to put
 };
 
@@ -72,24 +82,30 @@ class WorkDistributor {
   virtual int ranks() const = 0;
   // Runs one loop; `tasks` is read on the gathering process only. Returns when every process
   // is done with the loop; on the gathering process, true if every task was handed out
-  // (none left when should_stop turned true).
+  // (none left when should_stop turned true) and none of them was cancelled.
   virtual bool run(const std::vector<int>& tasks, const WorkLoop& loop) = 0;
   // Per process, on the gathering process (elsewhere: this process only).
   virtual std::vector<RankLoad> loads() const = 0;
 };
 
 // The task queue of the gathering process: hands tasks out in order, drops skipped ones,
-// refuses once should_stop holds. Not thread safe (its owner locks).
+// refuses once should_stop holds, counts the tasks that came back cancelled. Not thread safe
+// (its owner locks).
 class TaskQueue {
  public:
   TaskQueue(const std::vector<int>& tasks, const WorkLoop& loop) : tasks_(tasks), loop_(loop) {}
   std::vector<int> next(int max);
   bool exhausted() const { return next_ == tasks_.size(); }
+  // Tasks handed out that came back cancelled (not done).
+  void cancelled(std::size_t n) { cancelled_ += n; }
+  // Every task handed out, and each one done.
+  bool finished() const { return exhausted() && cancelled_ == 0; }
 
  private:
   const std::vector<int>& tasks_;
   const WorkLoop& loop_;
   std::size_t next_ = 0;
+  std::size_t cancelled_ = 0;
 };
 
 // Times the compute of the threads of one process: from a thread's take to its put.
@@ -134,8 +150,9 @@ class LocalDistributor : public WorkDistributor {
 
 // Runs source until it is empty on `threads` OpenMP threads: each thread takes `chunk` tasks
 // at a time, computes each with solve(state, task) -> result bytes using its own state (from
-// make_state()), and puts their results. The first exception stops every thread from taking
-// more and is rethrown.
+// make_state()), and puts their results. A solve that throws Cancelled gives a cancelled
+// result (the thread goes on taking: the loop's should_stop ends it). The first other
+// exception stops every thread from taking more and is rethrown.
 template <class MakeState, class Solve>
 void work_off(WorkSource& source, int threads, int chunk, MakeState make_state, Solve solve) {
   std::exception_ptr error;
@@ -153,7 +170,13 @@ void work_off(WorkSource& source, int threads, int chunk, MakeState make_state, 
         const std::vector<int> tasks = source.take(chunk);
         if (tasks.empty()) break;
         std::vector<TaskResult> results;
-        for (const int t : tasks) results.push_back({t, solve(state, t)});
+        for (const int t : tasks) {
+          try {
+            results.push_back({t, solve(state, t)});
+          } catch (const Cancelled&) {
+            results.push_back({t, {}, true});
+          }
+        }
         source.put(std::move(results));
       }
     } catch (...) {

@@ -50,6 +50,7 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
     last_checkpoint = clock::now();
     save(st);
   };
+  hooks.cancel = options.interrupted;
   hooks.should_stop = [&] {
     return interrupted() ||
            (options.stop_after > 0 && state.rows.size() >= done_before + options.stop_after);

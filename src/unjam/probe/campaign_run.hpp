@@ -39,7 +39,9 @@ struct CheckpointedCampaignOptions {
   std::string fingerprint;            // packing_fingerprint of the packing
   double checkpoint_s = 30.0;         // seconds between checkpoints
   int stop_after = 0;                 // > 0: stop after this many new probes
-  std::function<bool()> interrupted;  // stops the run and forces a checkpoint; may be empty
+  // Stops the run, abandons the running probes (CampaignHooks::cancel: polled from the
+  // probes' threads, so thread safe) and forces a checkpoint; may be empty.
+  std::function<bool()> interrupted;
   // After every gathered probe: (done, total, elapsed s, ETA s; -1 unknown). May be empty.
   std::function<void(int, int, double, double)> progress;
 };
@@ -51,7 +53,8 @@ struct CheckpointedCampaignResult {
 
 // Probes every target not yet in `state` (run_campaign over `distributor`), saving the state
 // to options.checkpoint at most every checkpoint_s seconds (and at every probe once
-// interrupted), and once more if it stops early. The checkpoint is left in place: remove it
+// interrupted), and once more if it stops early: the finished probes only, those abandoned
+// on an interrupt are probed again on resume. The checkpoint is left in place: remove it
 // once the outputs are written.
 CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
                                                      const CampaignSettings& settings,

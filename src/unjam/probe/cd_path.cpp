@@ -600,8 +600,9 @@ std::size_t state_key(const std::vector<State>& states, double sigma) {
 
 // Follows the path from a solution at lambda = 0 (the current states, x0 and x1 solved) to
 // lambda = 1 by parametric principal pivoting; false where it fails (stats.failure says why).
+// Polls `cancel` (may be empty) before every piece and throws Cancelled once it holds.
 bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& ps, Eigen::VectorXd& x0,
-                 Eigen::VectorXd& x1, CdPathStats& stats) {
+                 Eigen::VectorXd& x1, CdPathStats& stats, const std::function<bool()>& cancel) {
   const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * pb.num_contacts() + 1000;
   // sigma = -1 where the path turns back in lambda (a fold: the step has several solutions
   // there, as the dynamics from rest would pass them by).
@@ -610,6 +611,7 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
   const std::size_t start_key = state_key(path.states(), sigma);
   stats.lambda_max = 0.0;
   while (true) {
+    if (cancel && cancel()) throw Cancelled();
     const Event e = path.next_event(x0, x1, lambda, sigma);
     if (e.contact < 0 && sigma < 0.0) {  // a ray: no solution on this path
       stats.failure = "ray";
@@ -683,9 +685,10 @@ void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess
 
 // The step followed at compliance `compliance` from the static network or from `guess`, then
 // brought to the rigid step at compliance `rigid` (both as fractions of g / (dt^2 F0), see
-// CdPathSettings); f empty where the first path fails.
+// CdPathSettings); f empty where the first path fails. Every path polls `cancel` (follow_path).
 CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
-                      const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats) {
+                      const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats,
+                      const std::function<bool()>& cancel) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   // A compliance of CdPathSettings (a fraction of g / (dt^2 F0)) as kappa, and back.
@@ -718,7 +721,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   }
   path.solve(x0, x1);
   path.displacements(x0, x1);
-  if (!follow_path(path, pb, ps, x0, x1, stats)) {
+  if (!follow_path(path, pb, ps, x0, x1, stats, cancel)) {
     stats.factorizations += path.factorizations();
     return sol;
   }
@@ -752,7 +755,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     path.displacements(x0, x1);
     ++stats.refinements;
     CdPathStats proximal;
-    const bool reached = follow_path(path, pb, ps, x0, x1, proximal);
+    const bool reached = follow_path(path, pb, ps, x0, x1, proximal, cancel);
     stats.pieces += proximal.pieces;
     stats.degenerate += proximal.degenerate;
     failure = proximal.failure;
@@ -863,7 +866,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     CdPathStats stats;
     CdPathSettings at = ps;
     if (!soft) at.compliance = compliances[attempt];
-    CdStepSolution sol = follow(pb, packing, at, guess, soft ? start : at.compliance, at.compliance, stats);
+    CdStepSolution sol =
+        follow(pb, packing, at, guess, soft ? start : at.compliance, at.compliance, stats, settings.cancel);
     // restart_divisor below where this lowering stopped (or this path's start, where it failed),
     // never below the rigid compliance itself: a path there is the static start's.
     if (soft)

@@ -108,7 +108,9 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& step, 
 // result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.
 // A path that exceeds max_pieces, comes back to a state set it left (its start's: a closed
 // branch; another: cycling at a degenerate point), ends on a ray or returns forces with a
-// residual above kMaxPathResidual returns residual kNoSolution.
+// residual above kMaxPathResidual returns residual kNoSolution. Polls settings.cancel before
+// every piece of every path (the first path, the proximal steps, the lowerings and restarts
+// of the continuation) and throws Cancelled once it returns true.
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& path = {}, CdPathStats* stats = nullptr);
 

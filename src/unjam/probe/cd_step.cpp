@@ -112,6 +112,7 @@ CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSe
   std::mt19937_64 rng(settings.seed + static_cast<std::uint64_t>(contact));
   std::uniform_real_distribution<double> unit(1.0, 2.0);
   for (int retry = 0; retry < kLemkeRetries && lcp.z.size() == 0; ++retry) {
+    if (settings.cancel && settings.cancel()) throw Cancelled();
     Eigen::VectorXd d(q.size());
     for (Eigen::Index i = 0; i < d.size(); ++i) d[i] = unit(rng);
     const int pivots = lcp.pivots;

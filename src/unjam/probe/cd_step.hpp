@@ -51,6 +51,7 @@ struct CdStepSolution {
 // dense, meant for packings of up to ~1000 contacts; throws unjam::Error beyond
 // kMaxLemkeContacts. Lemke's path starts from zero forces, not from the static network, so
 // where the step has several exact solutions (docs/probe.md) it returns one of them.
+// settings.cancel is polled between Lemke's paths only (a path is not interrupted).
 inline constexpr int kMaxLemkeContacts = 1200;
 inline constexpr int kLemkeRetries = 4;
 CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSettings& settings);

@@ -32,6 +32,7 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   nlgs.velocity_tol = set.velocity_tol * set.g / set.dt;
   nlgs.min_sweeps = set.min_sweeps;
   nlgs.seed = set.seed;
+  nlgs.cancel = set.cancel;
 
   ProbeResult r;
   r.contact = contact;

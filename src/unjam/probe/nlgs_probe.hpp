@@ -10,6 +10,7 @@
 // since forces change by only ~1e-9 relative at first. This is the reference method: its
 // cost grows like (L/d)^2 sweeps and more, see kinematic_probe.hpp for the fast route.
 #include <cstdint>
+#include <functional>
 #include <optional>
 
 #include <Eigen/Core>
@@ -30,11 +31,17 @@ struct ProbeSettings {
   std::uint64_t seed = 0;
   // mu, P_ext, M_lambda, touch_gap of the step; empty: the packing's own (packing.meta.contact)
   std::optional<ContactModel> model;
+  // Polled by the long probes at cheap points (nlgs: every 16 sweeps; cd: every piece of its
+  // path); once it returns true the probe throws Cancelled (core/error.hpp). Called from the
+  // probe's thread: thread safe where probes run in parallel. Empty: never. Not a setting of
+  // the step (not recorded with the others).
+  std::function<bool()> cancel;
 };
 
 // Probes contact `contact` of a static packing (not modified). The step is the packing's
 // ContactProblem (contact/contact_problem.hpp) under contact_model_of(packing,
 // settings.model) and time step settings.dt, with g_eff = -settings.g on the probed contact.
+// Throws Cancelled once settings.cancel returns true.
 ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings& settings);
 
 // The same, and the forces of the step's solution in f = (fn_0, ft_0, fn_1, ...), in the

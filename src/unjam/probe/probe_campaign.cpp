@@ -93,17 +93,27 @@ ProbeResult decode(const std::string& bytes) {
 
 // The work of a loop of probes on this process: task t probes contacts[t] (contact t if
 // `contacts` is null), one probe per thread at a time on omp_get_max_threads() threads, each
-// thread with its own worker (the LP probe keeps its model); each result as bytes.
+// thread with its own worker (the LP probe keeps its model); each result as bytes. A probe
+// that s.nlgs.cancel abandons comes back cancelled (work_off).
 void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s,
                  const std::vector<int>* contacts) {
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;
     try {
       return encode(w.probe(p, s, k));
+    } catch (const Cancelled&) {
+      throw;
     } catch (const std::exception& e) {
       throw Error("probe of contact " + std::to_string(k) + ": " + e.what());
     }
   });
+}
+
+// Whether `a` or `b` (each may be empty) returns true; empty if both are.
+std::function<bool()> either(const std::function<bool()>& a, const std::function<bool()>& b) {
+  if (!a) return b;
+  if (!b) return a;
+  return [a, b] { return a() || b(); };
 }
 
 }  // namespace
@@ -181,7 +191,7 @@ std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings
   std::iota(tasks.begin(), tasks.end(), 0);
   std::vector<std::optional<ProbeResult>> results(contacts.size());
   WorkLoop loop;
-  loop.should_stop = should_stop;
+  loop.should_stop = either(should_stop, s.nlgs.cancel);
   loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, &contacts); };
   int finished = 0;
   loop.gather = [&](std::vector<TaskResult>& done) {
@@ -191,7 +201,8 @@ std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings
   };
   LocalDistributor local;
   local.run(tasks, loop);
-  // Tasks are handed out in order and every one handed out is finished: a stop leaves a prefix.
+  // Tasks are handed out in order; a stop leaves the ones not handed out, a cancel those it
+  // abandoned: the results up to the first missing one are a prefix of `contacts`.
   std::vector<ProbeResult> out;
   for (std::optional<ProbeResult>& r : results) {
     if (!r) break;
@@ -206,8 +217,10 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   return run_campaign(p, s, state, hooks, local);
 }
 
-bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& state,
+bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignState& state,
                   const CampaignHooks& hooks, WorkDistributor& distributor) {
+  CampaignSettings s = settings;
+  s.nlgs.cancel = either(settings.nlgs.cancel, hooks.cancel);
   const std::vector<int> all = campaign_targets(p, s);
   std::vector<int> todo;
   if (distributor.gathers()) {
@@ -223,7 +236,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
   }
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   WorkLoop loop;
-  loop.should_stop = hooks.should_stop;
+  loop.should_stop = either(hooks.should_stop, s.nlgs.cancel);
   loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, nullptr); };
   loop.gather = [&](std::vector<TaskResult>& results) {
     for (const TaskResult& tr : results) {

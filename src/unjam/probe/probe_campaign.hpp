@@ -70,6 +70,10 @@ struct CampaignHooks {
   std::function<void(int done, int total)> progress;  // after every gathered probe
   std::function<void(const CampaignState&)> checkpoint;  // after every gathered probe
   std::function<bool()> should_stop;
+  // Polled by the running probes (ProbeSettings::cancel: nlgs, lemke and cd) from their
+  // threads, so it must be thread safe; once it returns true they are abandoned (no row,
+  // computed again when the campaign resumes) and no more are handed out. May be empty.
+  std::function<bool()> cancel;
 };
 
 struct CampaignSummary {
@@ -93,7 +97,8 @@ void validate(const CampaignSettings& settings);
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
 
-// Probes every target not yet in `state`; returns false if should_stop ended it early.
+// Probes every target not yet in `state`; returns false if should_stop or cancel ended it
+// early (a cancelled probe leaves no row in `state`).
 bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
                   const CampaignHooks& hooks = {});
 
@@ -105,17 +110,20 @@ bool run_campaign(const Packing& packing, const CampaignSettings& settings, Camp
 bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
                   const CampaignHooks& hooks, WorkDistributor& distributor);
 
-// Probes one contact with the campaign's method.
+// Probes one contact with the campaign's method (throws Cancelled once settings.nlgs.cancel
+// returns true).
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
 
 // Probes every contact of `contacts` (indices into packing.contacts, any order, repeats
 // allowed) with the campaign's method, on omp_get_max_threads() threads as run_campaign does
 // (one probe per thread at a time; each thread keeps its LP model): the results in the order
 // of `contacts`, the same bytes for any thread count. should_stop (may be empty) is polled
-// before every probe is handed out; once it returns true, the results of the probes already
-// handed out (a prefix of `contacts`) are returned. progress (may be empty) is called with
-// (probes done, contacts.size()) as results arrive, one call at a time. Throws unjam::Error
-// for an index out of range, and the first error of a probe (naming its contact).
+// before every probe is handed out; settings.nlgs.cancel (may be empty, thread safe) is polled
+// there too and by the running probes, which it abandons. Once either returns true, the
+// results of the probes finished before the first one not finished (a prefix of `contacts`)
+// are returned. progress (may be empty) is called with (probes done, contacts.size()) as
+// results arrive, one call at a time. Throws unjam::Error for an index out of range, and the
+// first error of a probe (naming its contact).
 std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
                                         const std::vector<int>& contacts,
                                         const std::function<bool()>& should_stop = {},

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "unjam/core/error.hpp"
 #include "unjam/solver/coloring.hpp"
 
 namespace unjam {
@@ -330,8 +331,9 @@ void iterate_sweeps(Sweeper& s, const BlockLayout& L, NlgsThreading& threading, 
                         L.num_blocks() > 2 * num_colors && set.threading != Threading::kSerial;
   const bool adaptive = set.threading == Threading::kAuto;
   bool parallel = eligible && (!adaptive || threading.choose_parallel());
-  constexpr int kChunk = 16;  // sweeps between two looks at the clock
+  constexpr int kChunk = 16;  // sweeps between two looks at the clock (and at the cancel)
   while (!loop.done) {
+    if (s.set.cancel && s.set.cancel()) throw Cancelled();
     const int chunk_start = loop.sweep;
     const auto t0 = std::chrono::steady_clock::now();
     sweep_chunk(s, L, loop, res, chunk_start + kChunk, parallel);

@@ -10,6 +10,7 @@
 // lambda* = lambda_t + dt (P_in - P_ext) / M_lambda with the current P_in. All reductions
 // run over fixed blocks in a fixed order, so the result is the same for any thread count.
 #include <cstdint>
+#include <functional>
 
 #include "unjam/packing/contact.hpp"
 #include "unjam/packing/particles.hpp"
@@ -74,6 +75,10 @@ struct NlgsSettings {
   int check_every = 20;        // sweeps between two kStatic residual evaluations
   std::uint64_t seed = 0;      // colouring and colour order
   Threading threading = Threading::kAuto;
+  // Polled every 16 sweeps, between the parallel regions; once it returns true, solve_nlgs
+  // throws Cancelled (core/error.hpp) and the contacts and particles hold no result. Called
+  // from the solving thread: thread safe if several solves share it. Empty: never.
+  std::function<bool()> cancel;
 };
 
 struct NlgsResult {
@@ -90,7 +95,7 @@ struct NlgsResult {
 // contacts hold the warm-start forces. Out: velocities at t + dt, forces at t + dt.
 // `threading` records the measured costs of every solve large enough to run in parallel
 // (unless settings.threading is kSerial) and is read under kAuto only; the result does not
-// depend on it.
+// depend on it. Throws Cancelled once settings.cancel returns true.
 NlgsResult solve_nlgs(const StepProblem& problem, const NlgsSettings& settings,
                       Contacts& contacts, Particles& particles, NlgsThreading& threading);
 
