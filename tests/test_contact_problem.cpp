@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <initializer_list>
 #include <limits>
@@ -28,6 +29,7 @@
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
 #include "unjam/probe/probe_campaign.hpp"
+#include "unjam/solver/force_polish.hpp"
 #include "unjam/solver/step_problem.hpp"
 
 namespace unjam {
@@ -136,6 +138,97 @@ TEST(ContactProblem, EveryConsumerSeesTheSameTouchingContacts) {
   EXPECT_EQ(kinematic.system().contacts, admissible);
   EXPECT_EQ(select_contacts(p, touch_gap, fn_tol_F0), admissible);
   EXPECT_EQ(select_contacts(p, touch_gap, std::numeric_limits<double>::infinity()), touching);
+}
+
+TEST(ContactProblem, ThePolishAndTheKinematicProbeShareOneContactState) {
+  // The one state of a contact in a network, contact_state (packing/contact.hpp): the polish's
+  // active set (solver/force_polish) and the kinematic probe's held displacements
+  // (probe/kinematic_probe) both come from it, and the polish's contacts are the ones the
+  // ContactProblem marks touching and loaded.
+  int slid = 0;  // sliding contacts of the polished networks (p500-mu0.1's: 96, the others' none)
+  for (const char* name : {"p50-mu0.1", "p50-mu1", "p200-mu1", "p500-mu0.1"}) {
+    SCOPED_TRACE(name);
+    const Packing p = fixture(name);
+    const double mu = p.meta.contact.mu;
+    const ContactProblem cp = own_problem(p);
+
+    // The polish of the packing's static network, under the packing's own model.
+    Packing polished = p;
+    const PolishResult pol = polish_forces(polished, 1e-9, p.meta.contact);
+    ASSERT_TRUE(pol.success);
+    ASSERT_EQ(pol.states.size(), p.contacts.size());
+    ForceNetwork net{Eigen::VectorXd(cp.num_contacts()), Eigen::VectorXd(cp.num_contacts())};
+    for (int k = 0; k < cp.num_contacts(); ++k) {
+      net.fn[k] = polished.contacts[k].fn;
+      net.ft[k] = polished.contacts[k].ft;
+    }
+    const std::vector<ContactState> of_network = contact_states(net, mu, 0.0);
+    int closed = 0, sliding = 0;
+    for (int k = 0; k < cp.num_contacts(); ++k) {
+      // The same state, but for a closed contact on the boundary (the polish keeps it closed).
+      const bool boundary = pol.states[k] == ContactState::closed &&
+                            (net.fn[k] == 0.0 || std::abs(net.ft[k]) == mu * net.fn[k]);
+      if (!boundary) EXPECT_EQ(pol.states[k], of_network[k]) << "contact " << k;
+      if (pol.states[k] == ContactState::open) {
+        EXPECT_EQ(net.fn[k], 0.0);
+        EXPECT_EQ(net.ft[k], 0.0);
+      }
+      if (pol.states[k] != ContactState::open) {
+        EXPECT_TRUE(cp.state[k].touching && cp.state[k].loaded) << "contact " << k;
+      }
+      closed += pol.states[k] == ContactState::closed;
+      sliding += pol.states[k] == ContactState::sliding;
+    }
+    EXPECT_GT(closed, 0);
+    slid += sliding;
+    EXPECT_EQ(pol.active, closed + sliding);
+
+    // The kinematic probe's field holds what contact_state says of the LP optimum: U_n = 0
+    // for closed and sliding contacts, U_t = 0 for closed ones, U_n = g for the probed one,
+    // and, converged, no open contact closes and no sliding one slips along its force.
+    const CampaignSettings cs = campaign_settings_for(p);
+    KinematicProbe kinematic(p, cs.kinematic);
+    const EquilibriumSystem& sys = kinematic.system();
+    const double g = cs.kinematic.g, slack = 1e-6 * g;
+    int probes = 0;
+    for (int kc = 0; kc < sys.num_contacts() && probes < 6; kc += 7, ++probes) {
+      const ProbeResult r = kinematic.probe(sys.contacts[kc]);
+      ASSERT_TRUE(r.converged) << "contact " << sys.contacts[kc];
+      // Held rows hold to the field's equality residual (r.residual, units of g); a contact
+      // held after breaking its condition (an open one closing, a sliding one slipping along
+      // its force) then meets it to the same tolerance.
+      const double held = std::max(slack, 1.01 * r.residual * g);
+      Eigen::VectorXd q(sys.A.rows());
+      for (std::size_t i = 0; i < sys.grains.size(); ++i) {
+        const int grain = sys.grains[i];
+        q[3 * i] = r.u[grain].x();
+        q[3 * i + 1] = r.u[grain].y();
+        q[3 * i + 2] = r.u_rot[grain] * p.particles.radius[grain];
+      }
+      q[sys.pressure_row()] = r.lambda_dt;
+      const Eigen::VectorXd U = sys.A.transpose() * q;
+      const ForceNetwork opt = kinematic.network();
+      const auto state = contact_states(opt, sys.mu, cs.kinematic.state_tol * sys.F0);
+      for (int k = 0; k < sys.num_contacts(); ++k) {
+        const double un = U[2 * k], ut = U[2 * k + 1];
+        if (k == kc) {
+          EXPECT_NEAR(un, g, held) << "probed contact " << sys.contacts[k];
+        } else if (state[k] == ContactState::open) {
+          EXPECT_GE(un, -held) << "open contact " << sys.contacts[k] << " closes";
+        } else {
+          EXPECT_NEAR(un, 0.0, held) << "contact " << sys.contacts[k] << " not held";
+        }
+        if (k != kc && state[k] == ContactState::closed && mu > 0.0) {
+          EXPECT_NEAR(ut, 0.0, held) << "closed contact " << sys.contacts[k] << " slips";
+        }
+        if (k != kc && state[k] == ContactState::sliding) {
+          EXPECT_LE(ut * opt.ft[k], held * std::abs(opt.ft[k])) << "contact " << sys.contacts[k];
+        }
+      }
+    }
+    EXPECT_GT(probes, 0);
+  }
+  EXPECT_GT(slid, 0) << "both answers of contact_state are compared";
 }
 
 TEST(ContactProblem, ProbeSettingsCarryThePackingsContactModel) {

@@ -2,6 +2,7 @@
 // systems with one dense column (the cell's strain in the probe), so the Woodbury path is
 // exercised, and on one with a dependent row (a self-stress).
 #include <random>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
@@ -73,6 +74,51 @@ TEST(LeastNorm, SolvesASystemWithADependentRow) {
   const Eigen::MatrixXd N = Bd.fullPivLu().kernel();
   const Eigen::VectorXd w = D.cwiseInverse().asDiagonal() * *x;
   EXPECT_LT((N.transpose() * w).norm(), 1e-8 * w.norm() * std::sqrt(double(N.cols())));
+}
+
+TEST(LeastNorm, ActiveSetRoundsUntilNothingChanges) {
+  // The least-norm x with a . x = 1 and x >= 0, by solve_active_set: the set holds x_i = 0
+  // (a row e_i^T x = 0) for every component that came out negative. With a = (1, -1, 2, -2)
+  // the first solve gives x = a / 10 (two negative components), the second x = (1, 0, 2, 0) / 5,
+  // which needs no change.
+  const Eigen::Vector4d a(1.0, -1.0, 2.0, -2.0);
+  const auto run = [&](int max_rounds, Eigen::VectorXd& x) {
+    std::vector<char> held(4, 0);
+    const auto system = [&] {
+      std::vector<Eigen::Triplet<double>> t;
+      for (int i = 0; i < 4; ++i) t.emplace_back(0, i, a[i]);
+      int rows = 1;
+      for (int i = 0; i < 4; ++i)
+        if (held[i]) t.emplace_back(rows++, i, 1.0);
+      unjam::LeastNormSystem ls;
+      ls.B.resize(rows, 4);
+      ls.B.setFromTriplets(t.begin(), t.end());
+      ls.D = Eigen::VectorXd::Ones(4);
+      ls.d = Eigen::VectorXd::Zero(rows);
+      ls.d[0] = 1.0;
+      return ls;
+    };
+    const auto update = [&](const unjam::LeastNormSystem&, const Eigen::VectorXd& sol) {
+      x = sol;
+      int changes = 0;
+      for (int i = 0; i < 4; ++i)
+        if (!held[i] && x[i] < -1e-12) held[i] = 1, ++changes;
+      return changes;
+    };
+    return unjam::solve_active_set(max_rounds, system, update);
+  };
+  Eigen::VectorXd x;
+  const unjam::ActiveSetRounds settled = run(10, x);
+  EXPECT_TRUE(settled.settled());
+  EXPECT_EQ(settled.rounds, 2);
+  EXPECT_LT((x - Eigen::Vector4d(0.2, 0.0, 0.4, 0.0)).norm(), 1e-12);
+
+  const unjam::ActiveSetRounds cut = run(1, x);  // the round limit: one solve, changes left
+  EXPECT_FALSE(cut.settled());
+  EXPECT_TRUE(cut.factorised);
+  EXPECT_EQ(cut.rounds, 1);
+  EXPECT_EQ(cut.changes, 2);
+  EXPECT_LT((x - a / 10.0).norm(), 1e-12);
 }
 
 }  // namespace

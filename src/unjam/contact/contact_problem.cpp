@@ -33,9 +33,6 @@ ContactModel contact_model_of(const Packing& packing, const std::optional<Contac
   return model ? *model : packing.meta.contact;
 }
 
-namespace {
-
-// The balance rows of `contacts` with mu, F0 and P_ext of `model`.
 EquilibriumSystem model_system(const Packing& packing, const std::vector<int>& contacts,
                                const ContactModel& model) {
   EquilibriumSystem sys = build_equilibrium_system(packing, contacts);
@@ -44,8 +41,6 @@ EquilibriumSystem model_system(const Packing& packing, const std::vector<int>& c
   sys.rhs[sys.pressure_row()] = 2.0 * packing.cell.area() * model.P_ext;
   return sys;
 }
-
-}  // namespace
 
 EquilibriumSystem admissible_system(const Packing& packing, const ContactModel& model, double fn_tol) {
   return model_system(packing, select_contacts(packing, model, fn_tol), model);

@@ -33,7 +33,7 @@ namespace unjam {
 struct ContactProblem {
   Cell cell;                      // the packing's cell; V = Lx Ly
   ContactModel model;             // mu, P_ext, M_lambda, touch_gap
-  double dt = 0.0;                // time step (t0)
+  double dt = 0.0;                // time step of the step (t0); the probes: probe --dt
   EquilibriumSystem system;       // every contact of the packing, in its order; columns (fn_k, ft_k)
   Eigen::VectorXd inverse_mass;   // 1 / M per row of A (generalised coordinate)
   Eigen::VectorXd g_eff;          // per contact (length)
@@ -56,6 +56,15 @@ ContactProblem build_contact_problem(const Packing& packing, const ContactModel&
 // The model a consumer's settings name: `model` if set, else the packing's own
 // (packing.meta.contact).
 ContactModel contact_model_of(const Packing& packing, const std::optional<ContactModel>& model);
+
+// The balance rows of the listed contacts (indices into packing.contacts, in this order)
+// under `model`: build_equilibrium_system's rows with mu = model.mu, F0 = 2 R_avg model.P_ext
+// and the pressure row's right-hand side 2 V model.P_ext. Every contact problem's rows come
+// from it: build_contact_problem (all contacts), admissible_system (the admissible set) and
+// the static polish (solver/force_polish: the touching, loaded contacts). Throws
+// unjam::Error as build_equilibrium_system does.
+EquilibriumSystem model_system(const Packing& packing, const std::vector<int>& contacts,
+                               const ContactModel& model);
 
 // The admissible set of `packing` under `model` (docs/ensemble.md, "The admissible force
 // networks"): the balance rows of the contacts select_contacts(packing, model, fn_tol) keeps

@@ -30,7 +30,10 @@ using Contacts = std::vector<Contact>;
 
 // State of a contact with forces (fn, ft): open (fn = 0), sliding (mu > 0 and |ft| = mu fn > 0)
 // or closed (fn > 0 and |ft| < mu fn, or mu = 0). `tol` is an absolute force tolerance: open
-// if fn <= tol, sliding if mu fn - |ft| <= tol.
+// if fn <= tol, sliding if mu fn - |ft| <= tol. The one classification of a contact in a force
+// network: the polish's active set (solver/force_polish), the kinematic probe's (through
+// lp/force_lp's contact_states) and the export's state column take it; a sliding contact's
+// direction is the sign of ft.
 enum class ContactState { closed, sliding, open };
 
 inline ContactState contact_state(double fn, double ft, double mu, double tol) {

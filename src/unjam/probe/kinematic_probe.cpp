@@ -1,7 +1,9 @@
 #include "unjam/probe/kinematic_probe.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/error.hpp"
@@ -48,9 +50,11 @@ ProbeResult KinematicProbe::probe(int contact) {
   }
   const double slack = 1e-6 * settings_.g;
   Eigen::VectorXd q;
-  for (int round = 0;; ++round) {
-    // Constraint rows: column (2k + part) of A gives the relative displacement U_n (part 0)
-    // or U_t (part 1) of contact k as a row of C = A_sel^T.
+
+  // Constraint rows: column (2k + part) of A gives the relative displacement U_n (part 0)
+  // or U_t (part 1) of contact k as a row of C = A_sel^T. The least-norm problem is the
+  // displacement of least kinetic energy with those held: C q = d, D = M^-1.
+  const auto held_system = [&] {
     std::vector<Eigen::Triplet<double>> trip;
     std::vector<double> target;
     const auto add_row = [&](int column, double value) {
@@ -63,29 +67,42 @@ ProbeResult KinematicProbe::probe(int contact) {
       if (hold_n[k]) add_row(2 * k, k == kc ? settings_.g : 0.0);
       if (hold_t[k]) add_row(2 * k + 1, 0.0);
     }
-    Eigen::SparseMatrix<double> C(static_cast<int>(target.size()), system_.A.rows());
-    C.setFromTriplets(trip.begin(), trip.end());
-    const Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(target.data(), target.size());
-    const auto sol = least_norm_solution(C, inverse_mass_, d);
-    if (!sol) throw Error("kinematic probe: the constraint system could not be factorised");
-    q = *sol;
-    r.residual = (C * q - d).cwiseAbs().maxCoeff() / settings_.g;
+    LeastNormSystem ls;
+    ls.B.resize(static_cast<int>(target.size()), system_.A.rows());
+    ls.B.setFromTriplets(trip.begin(), trip.end());
+    ls.D = inverse_mass_;
+    ls.d = Eigen::Map<const Eigen::VectorXd>(target.data(),
+                                             static_cast<Eigen::Index>(target.size()));
+    return ls;
+  };
 
+  // The unilateral conditions of the contacts not held: U_n >= -slack for an open one;
+  // U_t ft <= slack |ft| for a sliding one (it slips against its friction force).
+  const auto hold_violations = [&](const LeastNormSystem& ls, const Eigen::VectorXd& sol) {
+    q = sol;
+    r.residual = (ls.B * q - ls.d).cwiseAbs().maxCoeff() / settings_.g;
     const Eigen::VectorXd U = system_.A.transpose() * q;
-    r.violations = 0;
+    int violations = 0;
     for (int k = 0; k < nc; ++k) {
       if (!hold_n[k] && U[2 * k] < -slack) {
         hold_n[k] = 1;
-        ++r.violations;
+        ++violations;
       }
       if (!hold_t[k] && mu > 0.0 && state[k] == ContactState::sliding &&
           U[2 * k + 1] * net.ft[k] > slack * std::abs(net.ft[k])) {
         hold_t[k] = 1;
-        ++r.violations;
+        ++violations;
       }
     }
-    if (r.violations == 0 || round == settings_.max_rounds) break;
-  }
+    return violations;
+  };
+
+  // The first solve and at most max_rounds more.
+  const ActiveSetRounds loop =
+      solve_active_set(std::max(settings_.max_rounds, 0) + 1, held_system, hold_violations);
+  if (!loop.factorised)
+    throw Error("kinematic probe: the constraint system could not be factorised");
+  r.violations = loop.changes;
   // F_crit is the LP optimum, exact. The field is a solution of the kinematic problem only
   // when no unilateral condition is violated: violations > 0 here means the round limit was
   // reached with contacts newly held whose field was not recomputed.

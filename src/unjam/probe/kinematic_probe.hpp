@@ -31,7 +31,8 @@ struct KinematicProbeSettings {
   double g = 1e-9;            // prescribed opening (R_max)
   double state_tol = 1e-7;    // (units of F0) open: fn <= tol; sliding: mu fn - |ft| <= tol
   LpMethod method = LpMethod::barrier;
-  int max_rounds = 50;        // active-set updates of the kinematic problem after its first solve
+  // Active-set updates after the first solve (solve_active_set, core/least_norm.hpp).
+  int max_rounds = 50;
   // mu, P_ext, M_lambda (weight of the cell strain in the kinetic energy) and touch_gap (pairs
   // closer than this enter the admissible set); empty: the packing's own (packing.meta.contact)
   std::optional<ContactModel> model;

@@ -26,10 +26,11 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   StepProblem pb = step_problem(problem);
   pb.bath.enabled = set.bath;
   pb.g_eff[contact] = -set.g;
+  const double dt = pb.dt;  // set.dt, as build_contact_problem took it: the one dt of the step
 
   NlgsSettings nlgs;
   nlgs.rule = Convergence::kVelocityChange;
-  nlgs.velocity_tol = set.velocity_tol * set.g / set.dt;
+  nlgs.velocity_tol = set.velocity_tol * set.g / dt;
   nlgs.min_sweeps = set.min_sweeps;
   nlgs.seed = set.seed;
   nlgs.cancel = set.cancel;
@@ -54,9 +55,9 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
     if (res.converged) break;
   }
   r.converged = res.converged;
-  r.residual = res.max_dU / (set.g / set.dt);
+  r.residual = res.max_dU / (set.g / dt);
   r.f_crit = contacts[contact].fn;
-  r.lambda_dt = res.lambda * set.dt;
+  r.lambda_dt = res.lambda * dt;
   f.resize(2 * static_cast<Eigen::Index>(contacts.size()));
   for (std::size_t k = 0; k < contacts.size(); ++k) {
     f[2 * k] = contacts[k].fn;
@@ -65,8 +66,8 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   r.u.resize(particles.size());
   r.u_rot.resize(particles.size());
   for (std::size_t i = 0; i < particles.size(); ++i) {
-    r.u[i] = set.dt * particles.velocity(i);
-    r.u_rot[i] = set.dt * particles.omega[i];
+    r.u[i] = dt * particles.velocity(i);
+    r.u_rot[i] = dt * particles.omega[i];
   }
   return r;
 }

@@ -23,7 +23,9 @@ namespace unjam {
 
 struct ProbeSettings {
   double g = 1e-9;             // prescribed opening (R_max)
-  double dt = 1e-3;            // probe time step (t0): inertia ~ m g / dt^2 is its error
+  // The probe step's time step (t0; probe --dt): inertia ~ m g / dt^2 is its error. The
+  // nlgs, lemke and cd probes take it once, into ContactProblem::dt (build_contact_problem).
+  double dt = 1e-3;
   double velocity_tol = 1e-6;  // converged when max |dU| in a sweep < velocity_tol g / dt
   long long max_sweeps = 10'000'000;
   int min_sweeps = 100;

@@ -94,7 +94,7 @@ CompactionResult compact(Packing& p, const CompactionSettings& s, const Compacti
         (sweeps_since_attempt >= attempt_sweeps || v_mean < v_last_attempt / 3.0)) {
       Packing trial = p;
       StaticSolveSettings fs = s.final_solve;
-      fs.dt = s.dynamics.dt;
+      fs.dt = s.dynamics.dt;  // the solve steps with the compaction's dt (static_solve.hpp)
       fs.max_sweeps = std::min(fs.max_sweeps, attempt_sweeps);
       sweeps_since_attempt = 0;
       v_last_attempt = v_mean;

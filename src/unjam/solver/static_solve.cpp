@@ -50,7 +50,8 @@ StaticSolveReport solve_static(Packing& p, const Bath& bath, const StaticSolveSe
       break;
     }
     if (set.polish_from > 0.0) {
-      const PolishResult pol = polish_forces(p, set.tol, set.touch_gap);
+      const PolishResult pol =
+          polish_forces(p, set.tol, with_touch_gap(p.meta.contact, set.touch_gap));
       if (pol.success) {
         rep.converged = rep.polished = true;
         rep.max_residual_F0 = pol.max_residual_F0;

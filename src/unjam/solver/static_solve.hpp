@@ -5,6 +5,9 @@
 // (kStatic rule) to a coarse residual, then the exact polish of force_polish.hpp on the
 // active set NLGS found; if the polish fails (active set not settled yet), NLGS goes on
 // to a ten times smaller residual and the polish is tried again.
+// The step's contact model: mu from packing.meta.contact, P_ext and M_lambda from `bath` for
+// NLGS, touch_gap from the settings (g_eff by touching_gaps, step_problem.hpp); the polish
+// takes the packing's model with that touch_gap (with_touch_gap).
 #include <cstdint>
 
 #include "unjam/packing/packing.hpp"
@@ -14,7 +17,11 @@
 namespace unjam {
 
 struct StaticSolveSettings {
-  double dt = 0.01;           // time step of the solve (the forces do not depend on it)
+  // Time step of the solve's step (v_free = 0; simulation time units). The static network
+  // does not depend on it, the NLGS iterates that reach it do: the compaction passes its own
+  // step (DynamicsSettings::dt), so that a packing's bytes depend on --dt as its dynamics do;
+  // the random walk's relaxation keeps this default.
+  double dt = 0.01;
   double tol = 1e-9;          // target: grain force and torque / R residual / F0, |P_in/P_ext - 1|
   double polish_from = 1e-2;  // first NLGS residual at which the polish is tried; 0: no polish
   double touch_gap = 1e-6;    // pairs with gap below this touch: they can close (g_eff = 0)

@@ -23,7 +23,11 @@ inline Bath bath_of(const ContactModel& model) { return {true, model.P_ext, mode
 
 struct StepProblem {
   Cell cell;                   // cell at time t; V = Lx Ly
-  double dt = 0.01;            // time step (simulation time units)
+  // Time step (simulation time units): the solver's input, not a setting of its own; the
+  // step that builds the problem sets it from its setting (docs/ARCHITECTURE.md, "Time
+  // steps"): ContactProblem::dt (step_problem), DynamicsSettings::dt (advance),
+  // StaticSolveSettings::dt (solve_static).
+  double dt = 0.01;
   double mu = 0.0;             // Coulomb friction coefficient
   Bath bath;
   double lambda_t = 0.0;       // cell strain rate at time t

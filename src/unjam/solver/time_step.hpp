@@ -9,7 +9,7 @@
 namespace unjam {
 
 struct DynamicsSettings {
-  double dt = 0.01;             // time step (simulation time units)
+  double dt = 0.01;             // the compaction's time step (simulation time units; pack --dt)
   Bath bath;
   NlgsSettings nlgs;            // its seed is mixed with the step number every step
   double min_detection = 0.01;  // smallest detection distance (units of R_max)
