@@ -117,6 +117,21 @@ std::size_t checkpointed_rows(const fs::path& out) {
   return nlohmann::json::parse(read_file(file)).at("state").at("rows").size();
 }
 
+// Starts `/bin/sh -c job` in a session of its own; its pid (the session's id), or -1. Open MPI
+// puts each rank in a process group of its own, so killing mpirun's group would leave the
+// ranks running; the session holds them all (session_processes).
+pid_t spawn_in_own_session(const std::string& job) {
+  const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
+  posix_spawnattr_t attr;
+  if (::posix_spawnattr_init(&attr) != 0) return -1;
+  pid_t pid = -1;
+  if (::posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSID) != 0 ||
+      ::posix_spawn(&pid, "/bin/sh", nullptr, &attr, const_cast<char**>(argv), environ) != 0)
+    pid = -1;
+  ::posix_spawnattr_destroy(&attr);
+  return pid;
+}
+
 // The live (not zombie) processes of session `sid`, from /proc.
 std::vector<pid_t> session_processes(pid_t sid) {
   std::vector<pid_t> pids;
@@ -149,16 +164,8 @@ TEST_F(Distributed, ProbeKilledOnTwoRanksResumesOnThree) {
   fs::create_directories(out);
   ASSERT_EQ(shell(unjam(0, args + one.string() + "'")).exit_code, 0);
 
-  const std::string job = "exec env " + unjam(2, args + out.string() + "' --checkpoint 0") + " >/dev/null 2>&1";
-  const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
-  // The job in a session of its own. Open MPI puts each rank in a process group of its own,
-  // so killing mpirun's group would leave the ranks running; the session holds them all.
-  posix_spawnattr_t attr;
-  ASSERT_EQ(::posix_spawnattr_init(&attr), 0);
-  ASSERT_EQ(::posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSID), 0);
-  pid_t pid = 0;
-  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, &attr, const_cast<char**>(argv), environ), 0);
-  ::posix_spawnattr_destroy(&attr);
+  const pid_t pid = spawn_in_own_session("exec env " + unjam(2, args + out.string() + "' --checkpoint 0") + " >/dev/null 2>&1");
+  ASSERT_GT(pid, 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (checkpointed_rows(out) < 10 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -198,14 +205,9 @@ TEST_F(Distributed, ProbeSigtermOfMpirunAbandonsTheRunningProbesAndResumes) {
   const CommandResult whole = shell(unjam(0, args + one.string() + "' --threads 2"));
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
 
-  const std::string job = "exec env " + unjam(2, args + out.string() + "' --threads 1") + " >'" + log.string() + "' 2>&1";
-  const char* argv[] = {"/bin/sh", "-c", job.c_str(), nullptr};
-  posix_spawnattr_t attr;
-  ASSERT_EQ(::posix_spawnattr_init(&attr), 0);
-  ASSERT_EQ(::posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSID), 0);
-  pid_t pid = 0;
-  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, &attr, const_cast<char**>(argv), environ), 0);
-  ::posix_spawnattr_destroy(&attr);
+  const pid_t pid = spawn_in_own_session("exec env " + unjam(2, args + out.string() + "' --threads 1") + " >'" +
+                                         log.string() + "' 2>&1");
+  ASSERT_GT(pid, 0);
   const auto text = [&] {
     std::ifstream in(log);
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
