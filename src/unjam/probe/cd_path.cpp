@@ -278,7 +278,7 @@ class StepPath {
 
   // x(lambda) = x0 + lambda x1 of the current states.
   void solve(Eigen::VectorXd& x0, Eigen::VectorXd& x1) {
-    Eigen::MatrixXd r = Eigen::MatrixXd::Zero(n_ + 2 * nc_, 2);  // columns: x0's, x1's
+    Columns r = Columns::Zero(n_ + 2 * nc_, kColumns);
     r.col(0).head(n_) = -load0_;
     r.col(1).head(n_) = -load1_;
     for (int k = 0; k < nc_; ++k) {
@@ -461,38 +461,35 @@ class StepPath {
     return Z;
   }
 
-  // The residuals Y - S Z of the columns `cols` (at most two), accumulated in long double:
-  // row by row (S_rows_), each sum held in an extended-precision register.
+  // The residuals Y - S Z of the columns `cols` (one or two), accumulated in long double.
   MatrixXld residual(const MatrixXld& Y, const Eigen::MatrixXd& Z, const std::vector<int>& cols) const {
-    const int nr = static_cast<int>(cols.size());
-    if (nr < 1 || nr > 2) throw Error("cd path: residual of " + std::to_string(nr) + " columns");
-    MatrixXld R(Y.rows(), nr);
+    MatrixXld R = cols.size() == 1 ? residual_rows<1>(Y, Z, cols) : residual_rows<2>(Y, Z, cols);
+    for (std::size_t j = 0; j < cols.size(); ++j)
+      for (std::size_t i = 0; i < rows_.size(); ++i)
+        for (const auto& [col, v] : D_[i])
+          R(rows_[i], static_cast<Eigen::Index>(j)) -= static_cast<long double>(v) * Z(col, cols[j]);
+    return R;
+  }
+
+  // Y - S_b Z on the columns `cols` (N of them), row by row (S_rows_), each row's N sums held
+  // in extended-precision registers.
+  template <int N>
+  MatrixXld residual_rows(const MatrixXld& Y, const Eigen::MatrixXd& Z, const std::vector<int>& cols) const {
+    MatrixXld R(Y.rows(), N);
     const int* start = S_rows_.outerIndexPtr();
     const int* col = S_rows_.innerIndexPtr();
     const double* value = S_rows_.valuePtr();
-    const double* z0 = Z.col(cols[0]).data();
-    if (nr == 1) {
-      for (int i = 0; i < S_rows_.outerSize(); ++i) {
-        long double s0 = Y(i, cols[0]);
-        for (int e = start[i]; e < start[i + 1]; ++e) s0 -= static_cast<long double>(value[e]) * z0[col[e]];
-        R(i, 0) = s0;
+    const double* z[N];
+    for (int j = 0; j < N; ++j) z[j] = Z.col(cols[j]).data();
+    for (int i = 0; i < S_rows_.outerSize(); ++i) {
+      long double sum[N];
+      for (int j = 0; j < N; ++j) sum[j] = Y(i, cols[j]);
+      for (int e = start[i]; e < start[i + 1]; ++e) {
+        const long double v = value[e];
+        for (int j = 0; j < N; ++j) sum[j] -= v * z[j][col[e]];
       }
-    } else {
-      const double* z1 = Z.col(cols[1]).data();
-      for (int i = 0; i < S_rows_.outerSize(); ++i) {
-        long double s0 = Y(i, cols[0]), s1 = Y(i, cols[1]);
-        for (int e = start[i]; e < start[i + 1]; ++e) {
-          const long double v = value[e];
-          s0 -= v * z0[col[e]];
-          s1 -= v * z1[col[e]];
-        }
-        R(i, 0) = s0;
-        R(i, 1) = s1;
-      }
+      for (int j = 0; j < N; ++j) R(i, j) = sum[j];
     }
-    for (int j = 0; j < nr; ++j)
-      for (std::size_t i = 0; i < rows_.size(); ++i)
-        for (const auto& [col, v] : D_[i]) R(rows_[i], j) -= static_cast<long double>(v) * Z(col, cols[j]);
     return R;
   }
 
@@ -520,8 +517,10 @@ class StepPath {
   // v_G = M_G^-1 (r_G + A_G f), so a kinematic row a_r^T v + (D f)_r = r_r reads
   // (a_r^T M_G^-1 A_G + D) f + a_pr v_p = r_r - a_r^T M_G^-1 r_G, and the pressure row
   // m_p v_p - a_p^T f = r_p stays as it is.
-  Eigen::MatrixXd solve_full(const Eigen::MatrixXd& R) {
-    const int p = n_ - 1, cols = static_cast<int>(R.cols());
+  static constexpr int kColumns = 2;  // x0's and x1's
+  using Columns = Eigen::Matrix<double, Eigen::Dynamic, kColumns>;
+  Eigen::MatrixXd solve_full(const Columns& R) {
+    const int p = n_ - 1, cols = kColumns;
     // Y in extended precision: a_r^T M_G^-1 r_G is of the order of the loads (F0 / m),
     // the kinematic terms of g / dt^2; rounded to double, the difference would carry an
     // error that S^-1 amplifies by cond(S) (see solve_reduced).
@@ -534,12 +533,12 @@ class StepPath {
     const Eigen::SparseMatrix<double>& A = pb_.system.A;
     for (int j = 0; j < A.outerSize(); ++j) {
       if (!active(j)) continue;
-      for (int c = 0; c < cols; ++c) {
-        long double sum = 0.0L;
-        for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it)
-          sum -= static_cast<long double>(it.value()) * T(it.row(), c);
-        Y(j, c) = sum;
+      long double sum[kColumns] = {0.0L, 0.0L};
+      for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) {
+        const long double v = it.value();
+        for (int c = 0; c < kColumns; ++c) sum[c] -= v * T(it.row(), c);
       }
+      for (int c = 0; c < kColumns; ++c) Y(j, c) = sum[c];
     }
     for (int c = 0; c < cols; ++c) {
       for (int i = 0; i < 2 * nc_; ++i) Y(i, c) += R(n_ + i, c);
