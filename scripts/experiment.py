@@ -15,8 +15,9 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   fixed        the mu = 0 packing of the first N and seed re-relaxed at every other mu
                (`unjam pack --from`) into OUT/fixed/N{N}-mu{mu}, probed the same way
                (the paper's Fig. 3b inset);
-  exact        with --cd-sample K > 0 (20 at the paper scale), on the sweep's packings of at
-               most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd`
+  exact        with --cd-sample K > 0 (300 at the paper scale), on the sweep's packings of at
+               most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd
+               --cd-start compliant` (--cd-start)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
@@ -86,8 +87,12 @@ def parse_args(argv):
                    "packing (a seeded subset; 0 = all)")
     p.add_argument("--cd-sample", type=int, help="override the scale's contacts per packing "
                    "probed by the exact probe (--method cd) and by lp on the same contacts, "
-                   "side by side in report.md (0 = none; default: 20 at the paper scale, 0 "
+                   "side by side in report.md (0 = none; default: 300 at the paper scale, 0 "
                    "otherwise)")
+    p.add_argument("--cd-start", choices=["compliant", "static"], help="where the exact "
+                   "probe's path starts (`unjam probe --cd-start`; default compliant: the rigid "
+                   "limit of stiff contacts, exact on more probes at 500 disks; static: the "
+                   "branch from the static network; docs/probe.md, \"Where the path starts\")")
     p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
                    "this many disks (default 500: its reach with friction, docs/probe.md)")
     p.add_argument("--probe-g", type=float, default=1e-9,
@@ -137,7 +142,8 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
-    for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n"):
+    for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
+              "cd_start"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

@@ -83,7 +83,7 @@ def findings(agg, fixed_agg, n_max):
     return out
 
 
-def exact_probe_section(path):
+def exact_probe_section(path, start="compliant"):
     """Report lines comparing the exact probe (cd) with lp on the same contacts, from
     OUT/exact-probe.csv (none when the table does not exist)."""
     if not os.path.isfile(path):
@@ -94,7 +94,9 @@ def exact_probe_section(path):
         groups.setdefault(key, []).append(r)
     mean = lambda g, c: sweep_table.mean_std([sweep_table.number(r[c]) for r in g])  # noqa: E731
     L = ["", "## The exact probe beside lp", "",
-         "The paper's probe step solved exactly (`--method cd`: the path from the static network, "
+         "The paper's probe step solved exactly (`--method cd --cd-start " + start + "`: "
+         + ("the rigid limit of stiff contacts followed from the static network, "
+            if start == "compliant" else "the path from the static network, ") +
          "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
          "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
          "Probes whose step has no solution on the path are left out of the cd means "
@@ -137,7 +139,7 @@ def write_report(path, args, cfg, R, figures, command):
         for (mu, n), a in fixed_agg.items():
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
-    L += exact_probe_section(os.path.join(out, "exact-probe.csv"))
+    L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
     L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
           "| finding | paper | measured | verdict |", "|---|---|---|---|"]
     for f, paper, meas, verdict in findings(agg, fixed_agg, n_max):
@@ -157,7 +159,8 @@ def write_report(path, args, cfg, R, figures, command):
           + (f"{cfg['probe_sample']} contacts per packing (seeded subset)" if cfg["probe_sample"]
              else "every force-carrying contact"),
           f"- exact probe (cd) beside lp: "
-          + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}"
+          + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
+             f"--cd-start {cfg['cd_start']}"
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

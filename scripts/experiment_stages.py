@@ -20,18 +20,20 @@ PY = sys.executable or "/usr/bin/python3"
 
 # The scales, as data.  samples: ensemble networks for Fig. 4; probe_sample: contacts probed
 # per packing (a seeded subset; 0 = every force-carrying contact).
-# cd_sample: contacts per packing probed by the exact probe (`--method cd`) and, for the
-# comparison, by lp on the same contacts (0: none), on the packings of N <= cd_max_n: the
-# exact probe costs ~10-15 s per probe at 500 disks with friction and does not reach a
-# solution at 2000 (docs/probe.md, "What limits it").
+# cd_sample: contacts per packing probed by the exact probe (`--method cd --cd-start
+# cd_start`) and, for the comparison, by lp on the same contacts (0: none), on the packings of
+# N <= cd_max_n: the exact probe by the compliant continuation costs 1-4 s of CPU per probe
+# at 500 disks with friction, ~50 s at 1000 and ~1000 s at 2000 (docs/probe.md, "Where the
+# path starts" and "What limits it"). cd_start: compliant (exact on 1789 of 1800 probes at 500
+# disks, "300 probes per packing"), or static (the branch from the static network).
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
-             "cd_sample": 0, "cd_max_n": 500},
+             "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant"},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
-             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500},
+             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant"},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
-              "probe_sample": 1000, "cd_sample": 20, "cd_max_n": 500},
+              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "compliant"},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
 # cd probes whose step was not solved exactly (without a solution: left out of the means;
@@ -123,12 +125,14 @@ def exact_probe_dirs(d):
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
 
 
-def exact_probe_stage(R, name, d, g, sample, dep):
-    """The exact probe (`unjam probe --sample K --method cd`) and the lp probe of the same
-    seeded contacts, into d/exact-cd and d/exact-lp: the paper's probe beside the stand-in."""
+def exact_probe_stage(R, name, d, g, sample, start, dep):
+    """The exact probe (`unjam probe --sample K --method cd --cd-start START`) and the lp probe
+    of the same seeded contacts, into d/exact-cd and d/exact-lp: the paper's probe beside the
+    stand-in."""
     outs = exact_probe_dirs(d)
     args = {m: ["--sample", str(sample), "--seed", "1", "--method", m, "--g", repr(g)]
             for m in outs}
+    args["cd"] += ["--cd-start", start]
     params = {"commands": [["unjam", "probe", d] + args[m] for m in sorted(outs)],
               "version": R.version}
 
@@ -139,7 +143,7 @@ def exact_probe_stage(R, name, d, g, sample, dep):
             if not probe_done(outs[m]):
                 R.call(st, R.unjam_cmd("probe", d, *args[m], "--out", outs[m], "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
-                 "(and lp)", os.path.join(d, "stage.json"), params, run,
+                 f"--cd-start {start} (and lp)", os.path.join(d, "stage.json"), params, run,
                  lambda: all(probe_done(o) for o in outs.values()), [dep])
 
 
@@ -320,7 +324,8 @@ def build(args, cfg, R):
     exact = [p for p in sweep if cfg["cd_sample"] > 0 and p["n"] <= cfg["cd_max_n"]]
     for p in exact:
         stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
-                                        args.probe_g, cfg["cd_sample"], p["pack"]))
+                                        args.probe_g, cfg["cd_sample"], cfg["cd_start"],
+                                        p["pack"]))
 
     # Fig. 4
     fig4 = os.path.join(out, "fig4-ensemble.png")

@@ -239,6 +239,8 @@ class ExperimentTiny(unittest.TestCase):
                 with open(os.path.join(d, f"exact-{m}", "probe_summary.json")) as f:
                     s = json.load(f)
                 self.assertEqual((s["method"], s["probes"], s["settings"]["g"]), (m, 3, 2e-9))
+                if m == "cd":  # the experiment's default start (--cd-start)
+                    self.assertEqual(s["settings"]["cd_start"], "compliant")
                 self.assertEqual(float(r[f"F_crit_over_F_cont_{m}"]), s["F_crit_over_F_cont"])
             self.assertEqual(int(r["not_exact"]), 0, r)
         # mu = 0, isostatic: lp gives F_crit = F_cont; the exact step adds its inertial term
@@ -247,6 +249,7 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(self.out, "report.md")) as f:
             report = f.read()
         self.assertIn("## The exact probe beside lp", report)
+        self.assertIn("--cd-start compliant", report)
         self.assertIn("| 1 | 100 | 1 | 3 | 0 | ", report)
 
 
