@@ -1,0 +1,478 @@
+"""The paper's probe (cd) against the LP maximum fn_max (lp) on the same contacts.
+
+Usage:  /usr/bin/python3 scripts/compare_probes.py CD_DIR LP_DIR [CD_DIR LP_DIR ...]
+                     [--out OUT] [--label NAME ...]
+
+Each pair is two campaign directories of `unjam probe` on one packing: the first made with
+--method cd (the probe step solved exactly), the second with --method lp (f_crit is fn_max,
+the maximum of the admissible interval), normally with the same --sample M --seed S. The
+contacts are matched by their index in the packing (column `contact` of probes.csv); forces
+are in units of F0 = 2 R_avg P_ext, residuals in units of the probe's opening g.
+
+Rules (per contact of a pair, from the cd run's `residual`):
+  solved   the cd step has a solution: residual <= 1e-3 g (a probe without one has residual
+           1.8e308); only solved contacts enter the means and the ratios
+  exact    the cd step solved exactly: residual <= 1e-6 g (`converged` in probes.csv)
+  ratio    f_crit(cd) / fn_max(lp), over the solved contacts with fn_max > 0 (a contact with
+           fn_max <= 0 has no ratio: a warning says how many)
+Contacts probed by only one run of a pair are ignored (a warning gives how many and which).
+
+Outputs, each written atomically (a temporary file, then os.replace), in OUT (default
+compare-probes):
+  OUT/compare.csv   one row per pair: packing, mu, N, seed (the packing's, from the
+                    summaries), label, probes (contacts probed by both), exact, solved,
+                    F_crit_over_F_cont_lp and F_crit_over_F_cont_cd (sum of f_crit over the
+                    solved contacts / sum of their f_cont, both methods on the same contacts),
+                    ratio_median, ratio_q1, ratio_q3 (quartiles: statistics.quantiles, n=4),
+                    ratio_min, ratio_max, alpha_lp, alpha_lp_err, alpha_cd, alpha_cd_err (the
+                    power-law fits of each probe_summary.json; empty where a fit failed),
+                    pieces_median (median over the shared contacts of cd's `sweeps`, the
+                    pieces of its path), cpu_s_per_probe_cd (sum of the cd ranks'
+                    busy_seconds / the cd campaign's probes)
+  OUT/ratios.csv    one row per shared contact and pair: packing, mu, N, seed, contact,
+                    f_cont, f_crit_lp (fn_max), f_crit_cd, ratio (empty where there is none),
+                    residual_cd, exact (0/1), solved (0/1)
+  OUT/compare.md    the per-pair table in Markdown, with the command that made it and the
+                    program version of the campaigns
+  OUT/compare.json  the command, the campaigns (directories, commands, program versions),
+                    the rules and the per-pair numbers (NaN as null)
+  OUT/ratio-distribution.png
+                    the empirical cumulative distribution of f_crit(cd) / fn_max, one curve
+                    per pair (labelled by mu, N and seed, or by --label), a line at 1
+A short table is printed to stdout.
+
+Nothing is written unless every pair is read and checked: each directory must hold a
+readable probes.csv and probe_summary.json; the first of a pair must be a cd campaign and
+the second an lp one; both must come from the same packing (`packing`, and N, mu and seed
+where both summaries have them; a shared contact must join the same grains with the same
+f_cont); a pair must share at least one contact.
+Exit codes: 0 done, 1 bad input or command line (the message is printed, no traceback).
+"""
+
+import argparse
+import csv
+import io
+import json
+import math
+import os
+import shlex
+import statistics
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from unjam_plot import (UserError, read_csv, read_json, require_dir, run_main,  # noqa: E402
+                        save_figure, warn)
+
+# Residual of the cd step (units of g) up to which it has a solution, and is exact.
+SOLVED_RESIDUAL = 1e-3
+EXACT_RESIDUAL = 1e-6
+# f_cont of one contact in the two runs of a pair (units of F0): the same packing gives the
+# same bits; a relative difference above this means two different packings.
+F_CONT_REL_TOL = 1e-9
+
+COMPARE_COLUMNS = ["packing", "mu", "N", "seed", "label", "probes", "exact", "solved",
+                   "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd", "ratio_median", "ratio_q1",
+                   "ratio_q3", "ratio_min", "ratio_max", "alpha_lp", "alpha_lp_err", "alpha_cd",
+                   "alpha_cd_err", "pieces_median", "cpu_s_per_probe_cd"]
+RATIO_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "f_crit_lp", "f_crit_cd",
+                 "ratio", "residual_cd", "exact", "solved"]
+
+
+class Parser(argparse.ArgumentParser):
+    """Command-line errors as UserError: one message, exit status 1."""
+
+    def error(self, message):
+        raise UserError(message)
+
+
+def parse(argv):
+    ap = Parser(prog="compare_probes.py", description=__doc__.split("\n")[0])
+    ap.add_argument("dirs", nargs="+", metavar="CD_DIR LP_DIR",
+                    help="pairs of probe campaign directories: cd first, lp second")
+    ap.add_argument("--out", default="compare-probes",
+                    help="output directory (default: compare-probes)")
+    ap.add_argument("--label", nargs="+", action="extend", default=[],
+                    help="a name per pair for the table and the figure (default: mu, N, seed)")
+    a = ap.parse_args(argv)
+    if len(a.dirs) % 2 != 0:
+        raise UserError(f"{len(a.dirs)} directories: expected pairs CD_DIR LP_DIR (an even "
+                        f"number)")
+    if a.label and len(a.label) != len(a.dirs) // 2:
+        raise UserError(f"{len(a.label)} labels for {len(a.dirs) // 2} pairs: give one "
+                        f"--label per pair or none")
+    return a
+
+
+# ---------------------------------------------------------------------------------------
+# Reading
+
+
+def _optional_number(summary, key):
+    """summary[key] as a float, NaN where missing, null, NaN or not a number."""
+    v = summary.get(key)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return math.nan
+    return float(v)
+
+
+def _integer_column(t, name, path):
+    v = t[name]
+    if any(x != round(x) for x in v):
+        raise UserError(f"{path}: column '{name}' holds a value that is not an integer")
+    return [int(x) for x in v]
+
+
+def read_campaign(directory, method):
+    """A probe campaign: {dir, summary, rows: {contact: row dict}} checked to be of method."""
+    require_dir(directory)
+    spath = os.path.join(directory, "probe_summary.json")
+    summary = read_json(spath)
+    got = summary.get("method")
+    if got != method:
+        raise UserError(f"{directory}: a campaign of method {got!r}, expected {method!r} "
+                        f"(each pair is CD_DIR LP_DIR: cd first, lp second)")
+    if not isinstance(summary.get("packing"), str) or not summary["packing"]:
+        raise UserError(f"{spath}: missing 'packing'")
+    ppath = os.path.join(directory, "probes.csv")
+    t = read_csv(ppath, ["contact", "a", "b", "f_cont", "f_crit", "sweeps", "residual"],
+                 text=["method"], allow_nan=["f_crit"], min_rows=1)
+    if "method" not in t:
+        raise UserError(f"{ppath}: missing column 'method'")
+    if any(m != method for m in t["method"]):
+        bad = sorted(set(m for m in t["method"] if m != method))
+        raise UserError(f"{ppath}: rows of method {', '.join(repr(m) for m in bad)} in a "
+                        f"campaign of method {method!r}")
+    contact = _integer_column(t, "contact", ppath)
+    a = _integer_column(t, "a", ppath)
+    b = _integer_column(t, "b", ppath)
+    sweeps = _integer_column(t, "sweeps", ppath)
+    rows = {}
+    for i, k in enumerate(contact):
+        if k in rows:
+            raise UserError(f"{ppath}: contact {k} appears twice")
+        if t["residual"][i] < 0:
+            raise UserError(f"{ppath}: contact {k} has a negative residual")
+        rows[k] = {"a": a[i], "b": b[i], "f_cont": float(t["f_cont"][i]),
+                   "f_crit": float(t["f_crit"][i]), "sweeps": sweeps[i],
+                   "residual": float(t["residual"][i])}
+    return {"dir": directory, "summary": summary, "rows": rows}
+
+
+def _same_value(x, y):
+    if isinstance(x, (int, float)) and isinstance(y, (int, float)) \
+            and not isinstance(x, bool) and not isinstance(y, bool):
+        return x == y or abs(x - y) <= 1e-12 * max(abs(x), abs(y))
+    return x == y
+
+
+def check_same_packing(cd, lp):
+    """Both runs of a pair made from one packing (UserError naming the difference)."""
+    s_cd, s_lp = cd["summary"], lp["summary"]
+    where = f"{cd['dir']} and {lp['dir']} come from different packings"
+    p_cd, p_lp = os.path.normpath(s_cd["packing"]), os.path.normpath(s_lp["packing"])
+    if p_cd != p_lp:
+        raise UserError(f"{where}: packing {s_cd['packing']} and {s_lp['packing']}")
+    for key in ("N", "mu", "seed"):
+        if key in s_cd and key in s_lp and not _same_value(s_cd[key], s_lp[key]):
+            raise UserError(f"{where}: {key} {s_cd[key]} and {s_lp[key]}")
+    for k in sorted(set(cd["rows"]) & set(lp["rows"])):
+        r, q = cd["rows"][k], lp["rows"][k]
+        if (r["a"], r["b"]) != (q["a"], q["b"]):
+            raise UserError(f"{where}: contact {k} joins grains {r['a']}-{r['b']} in the cd "
+                            f"run and {q['a']}-{q['b']} in the lp run")
+        if abs(r["f_cont"] - q["f_cont"]) > F_CONT_REL_TOL * max(abs(r["f_cont"]),
+                                                                 abs(q["f_cont"]), 1.0):
+            raise UserError(f"{where}: contact {k} carries f_cont {r['f_cont']!r} in the cd "
+                            f"run and {q['f_cont']!r} in the lp run")
+
+
+def _list(contacts, most=10):
+    shown = ", ".join(str(k) for k in contacts[:most])
+    return shown + (f", ... ({len(contacts) - most} more)" if len(contacts) > most else "")
+
+
+# ---------------------------------------------------------------------------------------
+# The comparison of one pair
+
+
+def compare_pair(cd, lp, label):
+    """(the pair's numbers, its ratios.csv rows, the ratios of its solved contacts)."""
+    s_cd, s_lp = cd["summary"], lp["summary"]
+    name = label or f"pair {cd['dir']} {lp['dir']}"
+    shared = sorted(set(cd["rows"]) & set(lp["rows"]))
+    if not shared:
+        raise UserError(f"{cd['dir']} and {lp['dir']} have no probed contact in common "
+                        f"(probe both with the same --sample M --seed S, or --all)")
+    for run, other in ((cd, lp), (lp, cd)):
+        only = sorted(set(run["rows"]) - set(other["rows"]))
+        if only:
+            method = run["summary"]["method"]
+            warn(f"{name}: {len(only)} contact{'s' if len(only) > 1 else ''} probed only by "
+                 f"{method} ({run['dir']}) ignored: {_list(only)}")
+
+    packing = {"packing": s_cd["packing"], "mu": _optional_number(s_cd, "mu"),
+               "N": s_cd.get("N"), "seed": s_cd.get("seed")}
+    rows, ratios, no_lp = [], [], []
+    sum_cont = sum_cd = sum_lp = 0.0
+    n_exact = n_solved = 0
+    for k in shared:
+        r, q = cd["rows"][k], lp["rows"][k]
+        solved = r["residual"] <= SOLVED_RESIDUAL
+        exact = r["residual"] <= EXACT_RESIDUAL
+        ratio = math.nan
+        if solved:
+            if not math.isfinite(r["f_crit"]):
+                raise UserError(f"{cd['dir']}/probes.csv: contact {k} is solved (residual "
+                                f"{r['residual']:g} g) but its f_crit is not a number")
+            if not math.isfinite(q["f_crit"]):
+                raise UserError(f"{lp['dir']}/probes.csv: contact {k}: f_crit is not a number")
+            n_solved += 1
+            n_exact += exact
+            sum_cont += r["f_cont"]
+            sum_cd += r["f_crit"]
+            sum_lp += q["f_crit"]
+            if q["f_crit"] > 0:
+                ratio = r["f_crit"] / q["f_crit"]
+                ratios.append(ratio)
+            else:
+                no_lp.append(k)
+        rows.append({**packing, "contact": k, "f_cont": r["f_cont"], "f_crit_lp": q["f_crit"],
+                     "f_crit_cd": r["f_crit"], "ratio": ratio, "residual_cd": r["residual"],
+                     "exact": int(exact), "solved": int(solved)})
+    if no_lp:
+        warn(f"{name}: {len(no_lp)} solved contact{'s' if len(no_lp) > 1 else ''} with "
+             f"fn_max <= 0 left out of the ratios: {_list(no_lp)}")
+    if n_solved == 0:
+        warn(f"{name}: no shared contact is solved by cd (residual <= {SOLVED_RESIDUAL:g} g): "
+             f"no means and no ratios")
+
+    if len(ratios) >= 2:
+        q1, _, q3 = statistics.quantiles(ratios, n=4)
+    else:
+        q1 = q3 = ratios[0] if ratios else math.nan
+    ranks = s_cd.get("ranks")
+    busy = math.nan
+    if isinstance(ranks, list) and ranks and all(
+            isinstance(x, dict) and isinstance(x.get("busy_seconds"), (int, float))
+            for x in ranks):
+        busy = float(sum(x["busy_seconds"] for x in ranks))
+    probes_cd = s_cd.get("probes")
+    if not isinstance(probes_cd, int) or isinstance(probes_cd, bool) or probes_cd <= 0:
+        probes_cd = len(cd["rows"])
+    numbers = {
+        **packing, "label": label or "", "probes": len(shared), "exact": n_exact,
+        "solved": n_solved,
+        "F_crit_over_F_cont_lp": sum_lp / sum_cont if sum_cont > 0 else math.nan,
+        "F_crit_over_F_cont_cd": sum_cd / sum_cont if sum_cont > 0 else math.nan,
+        "ratio_median": statistics.median(ratios) if ratios else math.nan,
+        "ratio_q1": q1, "ratio_q3": q3,
+        "ratio_min": min(ratios) if ratios else math.nan,
+        "ratio_max": max(ratios) if ratios else math.nan,
+        "alpha_lp": _optional_number(s_lp, "alpha"),
+        "alpha_lp_err": _optional_number(s_lp, "alpha_err"),
+        "alpha_cd": _optional_number(s_cd, "alpha"),
+        "alpha_cd_err": _optional_number(s_cd, "alpha_err"),
+        "pieces_median": float(statistics.median(cd["rows"][k]["sweeps"] for k in shared)),
+        "cpu_s_per_probe_cd": busy / probes_cd,
+    }
+    return numbers, rows, ratios
+
+
+# ---------------------------------------------------------------------------------------
+# Writing
+
+
+def write_atomic(path, text):
+    """text to path: a temporary file beside it, then os.replace (UserError if it fails)."""
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)),
+                               prefix="." + os.path.basename(path) + ".", suffix=".tmp")
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        raise UserError(f"{path}: cannot write: {e.strerror or e}") from None
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _csv_field(v):
+    """Full precision (repr) for floats, empty for NaN or None."""
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(v)
+    return v
+
+
+def csv_text(rows, columns):
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow([_csv_field(r[c]) for c in columns])
+    return buf.getvalue()
+
+
+def _json_value(v):
+    """v with every non-finite float (NaN: no value) as None, for strict JSON."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, dict):
+        return {k: _json_value(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_json_value(x) for x in v]
+    return v
+
+
+def _fixed(v, digits):
+    return "–" if v is None or (isinstance(v, float) and not math.isfinite(v)) \
+        else f"{v:.{digits}f}"
+
+
+def _alpha(v, err):
+    if not math.isfinite(v):
+        return "–"
+    return f"{v:.2f} ± {err:.2f}" if math.isfinite(err) else f"{v:.2f}"
+
+
+def pair_name(p):
+    if p["label"]:
+        return p["label"]
+    mu = f"{p['mu']:g}" if math.isfinite(p["mu"]) else "?"
+    parts = [f"mu = {mu}"]
+    if p["N"] is not None:
+        parts.append(f"N = {p['N']}")
+    if p["seed"] is not None:
+        parts.append(f"seed {p['seed']}")
+    return ", ".join(parts)
+
+
+TABLE_HEAD = ["pair", "probes", "exact", "solved", "<F_crit>/<F_cont> lp",
+              "<F_crit>/<F_cont> cd", "ratio median [q1, q3]", "ratio min–max",
+              "alpha lp", "alpha cd", "pieces", "CPU s/probe cd"]
+
+
+def table_cells(p):
+    return [pair_name(p), str(p["probes"]), str(p["exact"]), str(p["solved"]),
+            _fixed(p["F_crit_over_F_cont_lp"], 3), _fixed(p["F_crit_over_F_cont_cd"], 3),
+            f"{_fixed(p['ratio_median'], 3)} [{_fixed(p['ratio_q1'], 3)}, "
+            f"{_fixed(p['ratio_q3'], 3)}]",
+            f"{_fixed(p['ratio_min'], 3)}–{_fixed(p['ratio_max'], 3)}",
+            _alpha(p["alpha_lp"], p["alpha_lp_err"]), _alpha(p["alpha_cd"], p["alpha_cd_err"]),
+            f"{p['pieces_median']:g}",
+            f"{p['cpu_s_per_probe_cd']:.3g}" if math.isfinite(p["cpu_s_per_probe_cd"]) else "–"]
+
+
+def markdown(pairs, campaigns, command):
+    versions = sorted({str(c["summary"].get("program_version", "unknown")) for c in campaigns})
+    out = [f"Made by `{command}` from campaigns of unjam {', '.join(versions)}.", "",
+           "| " + " | ".join(TABLE_HEAD) + " |",
+           "|" + "|".join("---" if i == 0 else "---:" for i in range(len(TABLE_HEAD))) + "|"]
+    for p in pairs:
+        out.append("| " + " | ".join(table_cells(p)) + " |")
+    out += ["",
+            f"Contacts probed by both methods; solved: the cd step's residual <= "
+            f"{SOLVED_RESIDUAL:g} g, exact: <= {EXACT_RESIDUAL:g} g. <F_crit>/<F_cont>: sums "
+            f"over the contacts solved by cd, both methods on the same contacts. ratio: "
+            f"F_crit(cd) / fn_max(lp) per solved contact (quartiles: statistics.quantiles, "
+            f"n=4). alpha: the power-law fit of each campaign (± its error). pieces: median "
+            f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe.", ""]
+    for i, (p, (cd, lp)) in enumerate(zip(pairs, zip(campaigns[::2], campaigns[1::2])), 1):
+        out.append(f"{i}. {pair_name(p)}: packing `{p['packing']}`, cd `{cd['dir']}`, "
+                   f"lp `{lp['dir']}`")
+    return "\n".join(out) + "\n"
+
+
+def text_table(pairs):
+    rows = [TABLE_HEAD] + [table_cells(p) for p in pairs]
+    widths = [max(len(r[i]) for r in rows) for i in range(len(TABLE_HEAD))]
+    return "\n".join("  ".join(c.ljust(w) if i == 0 else c.rjust(w)
+                               for i, (c, w) in enumerate(zip(r, widths)))
+                     for r in rows)
+
+
+def figure(pairs, ratios):
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for p, r in zip(pairs, ratios):
+        if not r:
+            continue
+        x = sorted(r)
+        y = [(i + 1) / len(x) for i in range(len(x))]
+        ax.step([x[0]] + x, [0.0] + y, where="post",
+                label=f"{pair_name(p)} ({len(x)} contacts)")
+    ax.axvline(1.0, color="0.4", linestyle="--", linewidth=0.9, label="F_crit(cd) = fn_max")
+    ax.set_xlabel("F_crit(cd) / fn_max(lp), per contact (both in units of F0)")
+    ax.set_ylabel("fraction of contacts solved by cd with ratio ≤ x")
+    ax.set_title("The paper's probe (cd) against the LP maximum fn_max", fontsize=10)
+    ax.set_ylim(0.0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    return fig
+
+
+def main():
+    a = parse(sys.argv[1:])
+    command = shlex.join([os.path.basename(sys.executable), *sys.argv])
+    campaigns, pairs, rows, ratios = [], [], [], []
+    for i in range(0, len(a.dirs), 2):
+        cd = read_campaign(a.dirs[i], "cd")
+        lp = read_campaign(a.dirs[i + 1], "lp")
+        check_same_packing(cd, lp)
+        label = a.label[i // 2] if a.label else None
+        numbers, pair_rows, pair_ratios = compare_pair(cd, lp, label)
+        campaigns += [cd, lp]
+        pairs.append(numbers)
+        rows += pair_rows
+        ratios.append(pair_ratios)
+
+    if os.path.exists(a.out) and not os.path.isdir(a.out):
+        raise UserError(f"{a.out}: exists and is not a directory")
+    fig = figure(pairs, ratios)
+    try:
+        os.makedirs(a.out, exist_ok=True)
+    except OSError as e:
+        raise UserError(f"{a.out}: cannot create the directory: {e.strerror or e}") from None
+
+    record = {
+        "command": command,
+        "rules": {"solved_residual_g": SOLVED_RESIDUAL, "exact_residual_g": EXACT_RESIDUAL,
+                  "ratio": "f_crit(cd) / f_crit(lp) over solved contacts with f_crit(lp) > 0",
+                  "quartiles": "statistics.quantiles(n=4)"},
+        "pairs": [],
+    }
+    for p, cd, lp in zip(pairs, campaigns[::2], campaigns[1::2]):
+        entry = {k: _json_value(p[k]) for k in COMPARE_COLUMNS}
+        for role, c in (("cd", cd), ("lp", lp)):
+            s = c["summary"]
+            entry[role] = {"dir": os.path.abspath(c["dir"]), "command": s.get("command"),
+                           "program_version": s.get("program_version"),
+                           "settings": s.get("settings"), "probes": s.get("probes")}
+        record["pairs"].append(entry)
+    record = _json_value(record)
+    record["program_versions"] = sorted({str(c["summary"].get("program_version", "unknown"))
+                                         for c in campaigns})
+
+    write_atomic(os.path.join(a.out, "compare.csv"), csv_text(pairs, COMPARE_COLUMNS))
+    write_atomic(os.path.join(a.out, "ratios.csv"), csv_text(rows, RATIO_COLUMNS))
+    write_atomic(os.path.join(a.out, "compare.md"), markdown(pairs, campaigns, command))
+    write_atomic(os.path.join(a.out, "compare.json"),
+                 json.dumps(record, indent=1, sort_keys=True, allow_nan=False) + "\n")
+    print(text_table(pairs))
+    for name in ("compare.csv", "ratios.csv", "compare.md", "compare.json"):
+        print(os.path.join(a.out, name))
+    save_figure(fig, os.path.join(a.out, "ratio-distribution.png"))
+
+
+if __name__ == "__main__":
+    run_main(main)

@@ -1,0 +1,326 @@
+"""Tests of scripts/compare_probes.py on the fixtures p50-mu1 and p50-mu0.1 (a few seconds).
+
+Run from the repository root:  /usr/bin/python3 -m unittest tests/test_compare_probes.py
+The unjam binary: tests/unjam_binary.py.
+"""
+
+import csv
+import json
+import math
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+
+SCRIPT = os.path.join(REPO, "scripts", "compare_probes.py")
+FIXTURES = os.path.join(REPO, "tests", "fixtures")
+PACKINGS = ("p50-mu1", "p50-mu0.1")
+# The residual of a probe without a solution (unjam writes the largest double).
+NO_SOLUTION = "1.7976931348623157e+308"
+
+
+def run(*args):
+    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
+                          cwd=REPO, timeout=120)
+
+
+def read_rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def probes(directory):
+    """{contact: row} of a campaign's probes.csv."""
+    return {int(r["contact"]): r for r in read_rows(os.path.join(directory, "probes.csv"))}
+
+
+def contents(directory):
+    """{name: bytes} of the files in directory."""
+    out = {}
+    for name in os.listdir(directory):
+        with open(os.path.join(directory, name), "rb") as f:
+            out[name] = f.read()
+    return out
+
+
+def copy_campaign(src, name, edit_rows=None, edit_summary=None):
+    """A copy of campaign src in the test's directory; edit_rows(list of rows) and
+    edit_summary(dict) change its probes.csv and probe_summary.json in place."""
+    dst = os.path.join(R["tmp"], name)
+    shutil.copytree(src, dst)
+    if edit_rows:
+        path = os.path.join(dst, "probes.csv")
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            columns, rows = reader.fieldnames, list(reader)
+        edit_rows(rows)
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=columns, lineterminator="\n")
+            w.writeheader()
+            w.writerows(rows)
+    if edit_summary:
+        path = os.path.join(dst, "probe_summary.json")
+        with open(path) as f:
+            s = json.load(f)
+        edit_summary(s)
+        with open(path, "w") as f:
+            json.dump(s, f)
+    return dst
+
+
+R = {}  # the runs shared by the tests: directories, outputs
+
+
+def setUpModule():
+    if not (os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK)):
+        return
+    tmp = R["tmp"] = tempfile.mkdtemp(prefix="unjam-compare-")
+    R["cd"], R["lp"] = {}, {}
+    for name in PACKINGS:
+        packing = os.path.join(tmp, name)
+        shutil.copytree(os.path.join(FIXTURES, name), packing)
+        for method in ("cd", "lp"):
+            out = R[method][name] = os.path.join(tmp, f"{name}-{method}")
+            p = subprocess.run([UNJAM, "probe", packing, "--sample", "12", "--seed", "1",
+                                "--method", method, "--threads", "1", "--out", out],
+                               capture_output=True, text=True, timeout=120)
+            if p.returncode != 0:
+                raise AssertionError(f"unjam probe {name} {method} failed ({p.returncode}):\n"
+                                     f"{p.stdout}\n{p.stderr}")
+    out = R["out"] = os.path.join(tmp, "compare")
+    R["args"] = [R["cd"]["p50-mu1"], R["lp"]["p50-mu1"], R["cd"]["p50-mu0.1"],
+                 R["lp"]["p50-mu0.1"], "--out", out]
+    p = R["run"] = run(*R["args"])
+    if p.returncode != 0:
+        raise AssertionError(f"compare_probes.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")
+    R["compare"] = read_rows(os.path.join(out, "compare.csv"))
+    R["ratios"] = read_rows(os.path.join(out, "ratios.csv"))
+
+
+def tearDownModule():
+    if "tmp" in R:
+        shutil.rmtree(R["tmp"], ignore_errors=True)
+
+
+def expected(cd_dir, lp_dir):
+    """The pair's numbers recomputed from its two probes.csv (the rules of the script)."""
+    cd, lp = probes(cd_dir), probes(lp_dir)
+    shared = sorted(set(cd) & set(lp))
+    sol = [k for k in shared if float(cd[k]["residual"]) <= 1e-3]
+    f_cont = sum(float(cd[k]["f_cont"]) for k in sol)
+    ratios = [float(cd[k]["f_crit"]) / float(lp[k]["f_crit"]) for k in sol
+              if float(lp[k]["f_crit"]) > 0]
+    q1, _, q3 = statistics.quantiles(ratios, n=4)
+    return {"probes": len(shared), "solved": len(sol),
+            "exact": sum(float(cd[k]["residual"]) <= 1e-6 for k in shared),
+            "F_crit_over_F_cont_cd": sum(float(cd[k]["f_crit"]) for k in sol) / f_cont,
+            "F_crit_over_F_cont_lp": sum(float(lp[k]["f_crit"]) for k in sol) / f_cont,
+            "ratio_median": statistics.median(ratios), "ratio_q1": q1, "ratio_q3": q3,
+            "ratio_min": min(ratios), "ratio_max": max(ratios),
+            "pieces_median": statistics.median(int(cd[k]["sweeps"]) for k in shared)}
+
+
+@requires_unjam
+class ComparePairs(unittest.TestCase):
+    """The two fixtures, 12 contacts each by cd and lp (one run, setUpModule)."""
+
+    def assertClose(self, a, b, msg=None):
+        self.assertTrue(math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-300), f"{a} != {b} {msg}")
+
+    def test_1_ratios_are_the_two_f_crit_per_contact(self):
+        for name in PACKINGS:
+            cd, lp = probes(R["cd"][name]), probes(R["lp"][name])
+            rows = [r for r in R["ratios"] if r["packing"].endswith(name)]
+            self.assertEqual(sorted(int(r["contact"]) for r in rows), sorted(set(cd) & set(lp)))
+            for r in rows:
+                k = int(r["contact"])
+                self.assertEqual(float(r["f_crit_cd"]), float(cd[k]["f_crit"]))
+                self.assertEqual(float(r["f_crit_lp"]), float(lp[k]["f_crit"]))
+                self.assertEqual(float(r["f_cont"]), float(cd[k]["f_cont"]))
+                self.assertClose(float(r["ratio"]),
+                                 float(cd[k]["f_crit"]) / float(lp[k]["f_crit"]), k)
+                self.assertEqual(int(r["exact"]), int(float(cd[k]["residual"]) <= 1e-6))
+
+    def test_2_means_and_counts_are_recomputed(self):
+        self.assertEqual(len(R["compare"]), 2)
+        for row, name in zip(R["compare"], PACKINGS):
+            e = expected(R["cd"][name], R["lp"][name])
+            cd = probes(R["cd"][name])
+            for key in ("probes", "solved", "exact"):
+                self.assertEqual(int(row[key]), e[key], (name, key))
+            # Every probe of the fixtures is exact: unjam's own verdict agrees.
+            self.assertEqual(int(row["exact"]), sum(r["converged"] == "1" for r in cd.values()))
+            self.assertEqual(int(row["probes"]), 12)
+            for key, value in e.items():
+                self.assertClose(float(row[key]), float(value), (name, key))
+            with open(os.path.join(R["cd"][name], "probe_summary.json")) as f:
+                s_cd = json.load(f)
+            with open(os.path.join(R["lp"][name], "probe_summary.json")) as f:
+                s_lp = json.load(f)
+            # All 12 probes solved: the cd mean is unjam's own <F_crit>/<F_cont>.
+            self.assertAlmostEqual(float(row["F_crit_over_F_cont_cd"]),
+                                   s_cd["F_crit_over_F_cont"], delta=1e-9)
+            self.assertAlmostEqual(float(row["F_crit_over_F_cont_lp"]),
+                                   s_lp["F_crit_over_F_cont"], delta=1e-9)
+            self.assertEqual(float(row["alpha_cd"]), s_cd["alpha"])
+            self.assertEqual(float(row["alpha_lp_err"]), s_lp["alpha_err"])
+            self.assertClose(float(row["cpu_s_per_probe_cd"]),
+                             sum(x["busy_seconds"] for x in s_cd["ranks"]) / s_cd["probes"])
+            self.assertEqual(float(row["mu"]), s_cd["mu"])
+            self.assertEqual((int(row["N"]), int(row["seed"])), (s_cd["N"], s_cd["seed"]))
+
+    def test_3_figure_markdown_and_record(self):
+        png = os.path.join(R["out"], "ratio-distribution.png")
+        self.assertGreater(os.path.getsize(png), 1000)
+        with open(png, "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        with open(os.path.join(R["out"], "compare.md")) as f:
+            md = f.read()
+        self.assertIn("scripts/compare_probes.py", md.splitlines()[0])
+        self.assertIn("0.2.0", md.splitlines()[0])
+        self.assertEqual(sum(line.startswith("| mu = ") for line in md.splitlines()), 2)
+        with open(os.path.join(R["out"], "compare.json")) as f:
+            record = json.load(f)
+        self.assertIn("compare_probes.py", record["command"])
+        for entry, row in zip(record["pairs"], R["compare"]):
+            self.assertEqual(entry["ratio_median"], float(row["ratio_median"]))
+            self.assertEqual(entry["cd"]["program_version"], "0.2.0")
+        self.assertEqual(len(R["run"].stdout.splitlines()), 3 + 5)  # table, then 5 paths
+        self.assertEqual(R["run"].stderr, "")
+        # No temporary file is left behind.
+        self.assertEqual(sorted(os.listdir(R["out"])),
+                         ["compare.csv", "compare.json", "compare.md", "ratio-distribution.png",
+                          "ratios.csv"])
+
+    def test_4_unsolved_and_inexact_probes(self):
+        # One probe without a solution and one solved but not exact (made by editing a copy).
+        cd_src = R["cd"]["p50-mu1"]
+        contacts = sorted(probes(cd_src))
+        k_none, k_inexact = contacts[2], contacts[5]
+
+        def edit(rows):
+            for r in rows:
+                if int(r["contact"]) == k_none:
+                    r["residual"], r["converged"] = NO_SOLUTION, "0"
+                elif int(r["contact"]) == k_inexact:
+                    r["residual"], r["converged"] = "1e-05", "0"
+        cd = copy_campaign(cd_src, "cd-unsolved", edit)
+        out = os.path.join(R["tmp"], "compare-unsolved")
+        p = run(cd, R["lp"]["p50-mu1"], "--out", out, "--label", "edited")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        e = expected(cd, R["lp"]["p50-mu1"])
+        self.assertEqual((int(row["probes"]), int(row["solved"]), int(row["exact"])), (12, 11, 10))
+        self.assertEqual(row["label"], "edited")
+        for key, value in e.items():
+            self.assertClose(float(row[key]), float(value), key)
+        ratios = {int(r["contact"]): r for r in read_rows(os.path.join(out, "ratios.csv"))}
+        self.assertEqual(ratios[k_none]["ratio"], "")
+        self.assertEqual(ratios[k_none]["solved"], "0")
+        self.assertNotEqual(ratios[k_inexact]["ratio"], "")
+        self.assertEqual((ratios[k_inexact]["exact"], ratios[k_inexact]["solved"]), ("0", "1"))
+
+    def test_5_contact_missing_from_lp_is_skipped(self):
+        lp_src = R["lp"]["p50-mu1"]
+        k = sorted(probes(lp_src))[3]
+        lp = copy_campaign(lp_src, "lp-missing",
+                           lambda rows: rows.remove(next(r for r in rows if int(r["contact"]) == k)))
+        out = os.path.join(R["tmp"], "compare-missing")
+        p = run(R["cd"]["p50-mu1"], lp, "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("warning: ", p.stderr)
+        self.assertIn(f"1 contact probed only by cd ({R['cd']['p50-mu1']}) ignored: {k}", p.stderr)
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        self.assertEqual(int(row["probes"]), 11)
+        contacts = [int(r["contact"]) for r in read_rows(os.path.join(out, "ratios.csv"))]
+        self.assertNotIn(k, contacts)
+        self.assertEqual(len(contacts), 11)
+        e = expected(R["cd"]["p50-mu1"], lp)
+        self.assertClose(float(row["F_crit_over_F_cont_lp"]), e["F_crit_over_F_cont_lp"])
+
+    def test_6_zero_fn_max_has_no_ratio(self):
+        lp_src = R["lp"]["p50-mu0.1"]
+        k = sorted(probes(lp_src))[0]
+
+        def edit(rows):
+            for r in rows:
+                if int(r["contact"]) == k:
+                    r["f_crit"] = "0"
+        lp = copy_campaign(lp_src, "lp-zero", edit)
+        out = os.path.join(R["tmp"], "compare-zero")
+        p = run(R["cd"]["p50-mu0.1"], lp, "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("fn_max <= 0 left out of the ratios", p.stderr)
+        ratios = {int(r["contact"]): r for r in read_rows(os.path.join(out, "ratios.csv"))}
+        self.assertEqual(ratios[k]["ratio"], "")
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        e = expected(R["cd"]["p50-mu0.1"], lp)
+        self.assertClose(float(row["ratio_median"]), e["ratio_median"])
+
+    def test_7_errors_write_nothing(self):
+        cd1, lp1 = R["cd"]["p50-mu1"], R["lp"]["p50-mu1"]
+        cd01, lp01 = R["cd"]["p50-mu0.1"], R["lp"]["p50-mu0.1"]
+        corrupt = copy_campaign(cd1, "cd-corrupt")
+        with open(os.path.join(corrupt, "probes.csv"), "a") as f:
+            f.write("7,1,2,not-a-number\n")
+        no_summary = copy_campaign(cd1, "cd-no-summary")
+        os.unlink(os.path.join(no_summary, "probe_summary.json"))
+        bad_json = copy_campaign(lp1, "lp-bad-json")
+        with open(os.path.join(bad_json, "probe_summary.json"), "w") as f:
+            f.write('{"method": "lp", ')
+        other_mu = copy_campaign(lp1, "lp-other-mu", edit_summary=lambda s: s.update(mu=0.5))
+
+        def renumber(rows):
+            for r in rows:
+                r["contact"] = str(int(r["contact"]) + 10000)
+        disjoint = copy_campaign(lp1, "lp-disjoint", renumber)
+        other_path = copy_campaign(lp1, "lp-other-path",
+                                   edit_summary=lambda s: s.update(packing="/elsewhere/p50-mu1"))
+
+        def regrain(rows):
+            rows[4]["b"] = str(int(rows[4]["b"]) + 1)
+        other_grains = copy_campaign(lp1, "lp-other-grains", regrain)
+
+        def relabel(rows):
+            rows[0]["method"] = "lp"
+        mixed = copy_campaign(cd1, "cd-mixed", relabel)
+        cases = [
+            ([cd1, lp1, cd01], "3 directories: expected pairs"),
+            ([lp1, cd1], "a campaign of method 'lp', expected 'cd'"),
+            ([cd1, cd1], "a campaign of method 'cd', expected 'lp'"),
+            ([cd1, lp01], "come from different packings"),
+            ([cd1, lp1, cd1, other_mu], "come from different packings: mu 1.0 and 0.5"),
+            ([cd1, other_path], "come from different packings: packing "),
+            ([cd1, other_grains], "come from different packings: contact "),
+            ([mixed, lp1], "rows of method 'lp' in a campaign of method 'cd'"),
+            ([cd1, lp1, corrupt, lp1], "probes.csv line 14"),
+            ([no_summary, lp1], "probe_summary.json: file not found"),
+            ([cd1, bad_json], "probe_summary.json: not valid JSON"),
+            ([cd1, disjoint], "no probed contact in common"),
+            ([cd1, lp1, os.path.join(R["tmp"], "nowhere"), lp1], "directory not found"),
+            ([cd1, lp1, "--label", "a", "b"], "2 labels for 1 pairs"),
+        ]
+        for args, message in cases:
+            out = os.path.join(R["tmp"], "compare-error")
+            p = run(*args, "--out", out)
+            self.assertEqual(p.returncode, 1, (args, p.stderr))
+            self.assertTrue(p.stderr.startswith("compare_probes.py: error: "), p.stderr)
+            self.assertIn(message, p.stderr)
+            self.assertNotIn("Traceback", p.stderr)
+            self.assertFalse(os.path.exists(out), args)
+        # A failed run leaves earlier outputs as they were.
+        before = contents(R["out"])
+        p = run(lp1, cd1, "--out", R["out"])
+        self.assertEqual(p.returncode, 1)
+        self.assertEqual(contents(R["out"]), before)
+
+
+if __name__ == "__main__":
+    unittest.main()
