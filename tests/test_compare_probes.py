@@ -41,6 +41,12 @@ def probes(directory):
     return {int(r["contact"]): r for r in read_rows(os.path.join(directory, "probes.csv"))}
 
 
+def summary(directory):
+    """A campaign's probe_summary.json."""
+    with open(os.path.join(directory, "probe_summary.json")) as f:
+        return json.load(f)
+
+
 def contents(directory):
     """{name: bytes} of the files in directory."""
     out = {}
@@ -177,27 +183,29 @@ class ComparePairs(unittest.TestCase):
             self.assertEqual((int(row["N"]), int(row["seed"])), (s_cd["N"], s_cd["seed"]))
 
     def test_3_figure_markdown_and_record(self):
-        png = os.path.join(R["out"], "ratio-distribution.png")
-        self.assertGreater(os.path.getsize(png), 1000)
-        with open(png, "rb") as f:
-            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        for name in ("ratio-distribution.png", "friction.png"):
+            png = os.path.join(R["out"], name)
+            self.assertGreater(os.path.getsize(png), 1000)
+            with open(png, "rb") as f:
+                self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
         with open(os.path.join(R["out"], "compare.md")) as f:
             md = f.read()
         self.assertIn("scripts/compare_probes.py", md.splitlines()[0])
-        self.assertIn("0.2.0", md.splitlines()[0])
+        version = summary(R["cd"]["p50-mu1"])["program_version"]  # the campaigns' own
+        self.assertIn(version, md.splitlines()[0])
         self.assertEqual(sum(line.startswith("| mu = ") for line in md.splitlines()), 2)
         with open(os.path.join(R["out"], "compare.json")) as f:
             record = json.load(f)
         self.assertIn("compare_probes.py", record["command"])
         for entry, row in zip(record["pairs"], R["compare"]):
             self.assertEqual(entry["ratio_median"], float(row["ratio_median"]))
-            self.assertEqual(entry["cd"]["program_version"], "0.2.0")
-        self.assertEqual(len(R["run"].stdout.splitlines()), 3 + 5)  # table, then 5 paths
+            self.assertEqual(entry["cd"]["program_version"], version)
+        self.assertEqual(len(R["run"].stdout.splitlines()), 3 + 6)  # table, then 6 paths
         self.assertEqual(R["run"].stderr, "")
         # No temporary file is left behind.
         self.assertEqual(sorted(os.listdir(R["out"])),
-                         ["compare.csv", "compare.json", "compare.md", "ratio-distribution.png",
-                          "ratios.csv"])
+                         ["compare.csv", "compare.json", "compare.md", "friction.png",
+                          "ratio-distribution.png", "ratios.csv"])
 
     def test_4_unsolved_and_inexact_probes(self):
         # One probe without a solution and one solved but not exact (made by editing a copy).
