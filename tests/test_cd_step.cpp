@@ -193,6 +193,43 @@ TEST(CdPath, CompliantContinuationReachesTheRigidStepFromTheStaticState) {
   EXPECT_NEAR(s.result.f_crit / cd_reference().at(5), 1.0, 1e-6);
 }
 
+TEST(CdPath, TheStepDependsOnGAndDtOnlyThroughGOverDtSquared) {
+  // The step's unknowns are v = q / dt^2 and f: the opening enters as g / dt^2, the
+  // compliance as a fraction of g / (dt^2 F0), and gaps of touching pairs without force as
+  // ~1e-9 g. So opening by g over dt and by k^2 g over k dt is one problem, F_crit the same
+  // and the field u / g the same, and the inertial term of F_crit is a function of
+  // m g / (dt^2 F0) alone (docs/probe.md, "The quasi-static limit"). Both starts, both
+  // frictional fixtures; the third pair is inertia 100 times smaller, which must move F_crit.
+  for (const char* name : {"p50-mu1", "p50-mu0.1"}) {
+    const Packing& p = fixture(name);
+    for (const CdPathStart start : {CdPathStart::static_network, CdPathStart::compliant}) {
+      CdPathSettings ps;
+      ps.start = start;
+      for (int k = 0; k < 4; ++k) {
+        ProbeSettings a, b, c;
+        a.g = 1e-9, a.dt = 1e-3;
+        b.g = 1e-7, b.dt = 1e-2;  // same g / dt^2
+        c.g = 1e-9, c.dt = 1e-2;  // g / dt^2 100 times smaller
+        const ProbeResult ra = probe_cd_path(p, k, a, ps).result;
+        const ProbeResult rb = probe_cd_path(p, k, b, ps).result;
+        const ProbeResult rc = probe_cd_path(p, k, c, ps).result;
+        const std::string at = std::string(name) + " contact " + std::to_string(k);
+        ASSERT_TRUE(ra.converged && rb.converged && rc.converged) << at;
+        EXPECT_NEAR(rb.f_crit / ra.f_crit, 1.0, 1e-9) << at;
+        EXPECT_GT(std::abs(rc.f_crit / ra.f_crit - 1.0), 1e-6) << at;
+        double diff = 0.0, scale = 0.0;
+        for (std::size_t i = 0; i < ra.u.size(); ++i) {
+          const Vec2 da = ra.u[i] / ra.g, db = rb.u[i] / rb.g;
+          diff = std::max(diff, std::max(std::abs(da.x() - db.x()), std::abs(da.y() - db.y())));
+          scale = std::max(scale, std::max(std::abs(da.x()), std::abs(da.y())));
+        }
+        EXPECT_GT(scale, 0.1) << at;
+        EXPECT_LT(diff, 1e-9 * scale) << at;
+      }
+    }
+  }
+}
+
 TEST(CdPath, AgreesWithLemkeWhereTheStepHasOneSolution) {
   // p50-mu0.1 contacts 0..5: Lemke's method (dense, an independent pivoting order) and the
   // path find the same F_crit, and both solutions pass the step's residual check.
