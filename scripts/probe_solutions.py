@@ -2,7 +2,7 @@
 
 Usage:  /usr/bin/python3 scripts/probe_solutions.py PACKING (--all | --sample M [--seed S])
                      [--starts static compliant lp] [--rel-tol 1e-3] [--out DIR]
-                     [--unjam PATH] [--threads T]
+                     [--unjam PATH] [--threads T] [--g G] [--dt DT]
 
 With friction the probe step's complementarity problem is not a P-matrix problem, and one
 probe can have several exact solutions (docs/probe.md, "Where the path starts"). This runs
@@ -54,6 +54,9 @@ def parse(argv):
     ap.add_argument("--out", help="output directory (default: PACKING-solutions)")
     ap.add_argument("--unjam", default=os.path.join(REPO, "build", "release", "unjam"))
     ap.add_argument("--threads", type=int, default=0, help="threads of each unjam run (0: all)")
+    ap.add_argument("--g", type=float, help="the probe's opening (unjam probe --g; default 1e-9)")
+    ap.add_argument("--dt", type=float, help="the probe step's time step (unjam probe --dt; "
+                    "default the quasi-static sqrt(g / 1e-5))")
     a = ap.parse_args(argv)
     if not os.path.isfile(os.path.join(a.packing, "meta.json")):
         ap.error(f"{a.packing} is not a packing directory (no meta.json)")
@@ -61,6 +64,10 @@ def parse(argv):
         ap.error("--sample must be at least 1")
     if not a.rel_tol > 0:
         ap.error("--rel-tol must be positive")
+    for name in ("g", "dt"):
+        v = getattr(a, name)
+        if v is not None and not (v > 0 and v < float("inf")):
+            ap.error(f"--{name} must be a finite number > 0, got {v}")
     if len(set(a.starts)) != len(a.starts):
         ap.error("--starts lists a start twice")
     if not (os.path.isfile(a.unjam) and os.access(a.unjam, os.X_OK)):
@@ -75,6 +82,8 @@ def run_start(a, start):
     sel = ["--all"] if a.all else ["--sample", str(a.sample), "--seed", str(a.seed)]
     cmd = [a.unjam, "probe", a.packing, *sel, "--method", "cd", "--cd-start", start,
            "--threads", str(a.threads), "--out", out]
+    cmd += [arg for name in ("g", "dt") if getattr(a, name) is not None
+            for arg in (f"--{name}", repr(getattr(a, name)))]
     print(f"[{start}] {' '.join(cmd)}", flush=True)
     p = subprocess.run(cmd)
     if p.returncode != 0:

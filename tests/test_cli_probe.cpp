@@ -120,6 +120,36 @@ TEST_F(CliProbe, SampleProbesSeededForceCarryingContactsAndSummarisesThem) {
   EXPECT_NE(seen2, seen);
 }
 
+TEST_F(CliProbe, TheExactProbeDefaultsToTheQuasiStaticTimeStep) {
+  // Without --dt the exact probe takes dt = sqrt(g / 1e-5) (1e-2 at g = 1e-9; 0.1 at g = 1e-7),
+  // the quasi-static limit (docs/probe.md, "The quasi-static limit"), recorded in the
+  // summary; nlgs keeps 1e-3. The same bytes as --dt given explicitly, other bytes than
+  // dt = 1e-3 (the inertial term).
+  const std::string args = " --sample 3 --method cd --quiet --threads 1 --out ";
+  const fs::path none = root_ / "dt-default", same = root_ / "dt-1e-2", paper = root_ / "dt-1e-3",
+                 big = root_ / "g-1e-7";
+  for (const fs::path& d : {none, same, paper, big}) fs::create_directories(d);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(none)).exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(same) + " --dt 1e-2").exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(paper) + " --dt 1e-3").exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(big) + " --g 1e-7").exit_code, 0);
+  EXPECT_DOUBLE_EQ(read_json_file(none / "probe_summary.json")["settings"]["dt"].get<double>(), 1e-2);
+  EXPECT_NEAR(read_json_file(big / "probe_summary.json")["settings"]["dt"].get<double>(), 0.1, 1e-15);
+  EXPECT_EQ(read_file(none / "probes.csv"), read_file(same / "probes.csv"));
+  EXPECT_NE(read_file(none / "probes.csv"), read_file(paper / "probes.csv"));
+  // g = 1e-7 at dt = 0.1 is the step of g = 1e-9 at dt = 1e-2 (the same g / dt^2).
+  const CsvTable a = CsvTable::read(none / "probes.csv"), b = CsvTable::read(big / "probes.csv");
+  ASSERT_EQ(a.rows(), b.rows());
+  for (std::size_t i = 0; i < a.rows(); ++i)
+    EXPECT_NEAR(a.number(i, a.column("f_crit")) / b.number(i, b.column("f_crit")), 1.0, 1e-9) << "row " << i;
+  const fs::path nlgs = root_ / "nlgs-dt";
+  fs::create_directories(nlgs);
+  const testing::ToolRun r =
+      run_tool("probe " + q(dir_) + " --sample 1 --method nlgs --max-sweeps 200 --quiet --threads 1 --out " + q(nlgs));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_DOUBLE_EQ(read_json_file(nlgs / "probe_summary.json")["settings"]["dt"].get<double>(), 1e-3);
+}
+
 TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutionsHere) {
   // --method cd --cd-start compliant on a seeded sample of p50-mu0.1: every probe exact, and
   // on this packing the same F_crit as the path from the static network within 1e-3
@@ -152,19 +182,19 @@ TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutio
 
 }  // namespace
 TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {
-  // Contact 49 of p200-mu1: the branch of the step through the static network turns back at
-  // ~2.3e-5 of the opening and closes on itself, at every compliance tried (docs/probe.md,
-  // "Why a path fails"). The single probe says so, exits 1 and names the other selection,
-  // which solves it.
+  // Contact 49 of p200-mu1 at dt = 1e-3: the branch of the step through the static network
+  // turns back at ~2.3e-5 of the opening and closes on itself, at every compliance tried
+  // (docs/probe.md, "Why a path fails"). The single probe says so, exits 1 and names the
+  // other selection, which solves it.
   const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
   const fs::path out = root_ / "loop";
   fs::create_directories(out);
-  testing::ToolRun r = run_tool("probe " + q(p200) + " --contact 49 --method cd --threads 1 --out " + q(out));
+  testing::ToolRun r = run_tool("probe " + q(p200) + " --contact 49 --method cd --dt 1e-3 --threads 1 --out " + q(out));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("through the static network closes on itself, turning back at 2.29e-05 of the opening"),
             std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--cd-start compliant"), std::string::npos) << r.output;
-  r = run_tool("probe " + q(p200) + " --contact 49 --method cd --cd-start compliant --threads 1 --out " + q(out));
+  r = run_tool("probe " + q(p200) + " --contact 49 --method cd --dt 1e-3 --cd-start compliant --threads 1 --out " + q(out));
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 

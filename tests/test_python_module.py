@@ -148,7 +148,7 @@ def signature_defaults(function):
                           "p-ext": "p_ext", "phi-gas": "phi_gas", "dt": "dt", "m-lambda": "m_lambda",
                           "tol": "tol", "max-sweeps": "max_sweeps", "static-tol": "static_tol",
                           "max-steps": "max_steps"}),
-    ("probe", unjam.probe, {"method": "method", "g": "g", "dt": "dt",
+    ("probe", unjam.probe, {"method": "method", "g": "g",
                             "velocity-tol": "velocity_tol", "max-sweeps": "max_sweeps"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
@@ -158,6 +158,16 @@ def test_defaults_equal_the_tool(command, function, names):
     for option, argument in names.items():
         a, b = cli[option], py[argument].strip("'")
         assert a == b or float(a) == float(b), (option, a, b)
+
+
+def test_the_exact_probe_defaults_to_the_quasi_static_time_step(p50):
+    # dt=None: the method's default, as `unjam probe` without --dt (lemke, cd: sqrt(g / 1e-5),
+    # 1e-2 at g = 1e-9; docs/probe.md, "The quasi-static limit").
+    default = unjam.probe(p50, contact=0, method="cd")
+    assert default.f_crit == unjam.probe(p50, contact=0, method="cd", dt=1e-2).f_crit
+    assert default.f_crit != unjam.probe(p50, contact=0, method="cd", dt=1e-3).f_crit
+    assert (unjam.probe(p50, contact=0, method="cd", g=1e-7).f_crit / 1e-7
+            == pytest.approx(unjam.probe(p50, contact=0, method="cd", g=1e-7, dt=0.1).f_crit / 1e-7))
 
 
 def test_bad_arguments_raise(p50, tmp_path):

@@ -26,8 +26,10 @@ class SiconosCrossCheck(unittest.TestCase):
         with tempfile.TemporaryDirectory() as out:
             for k, f_ref in reference().items():
                 dat = os.path.join(out, f"step-{k}.dat")
+                # dt = 1e-3: the time step of the reference (cd-reference.csv)
                 subprocess.run([UNJAM, "probe", FIXTURE, "--contact", str(k), "--method", "lemke",
-                                "--out", out, "--export-problem", dat, "--threads", "1"],
+                                "--dt", "1e-3", "--out", out, "--export-problem", dat,
+                                "--threads", "1"],
                                check=True, capture_output=True)
                 with open(os.path.join(out, f"probe-{k}-forces.csv")) as f:
                     ours = {int(r["contact"]): float(r["fn"]) for r in csv.DictReader(f)}

@@ -39,7 +39,8 @@ struct ProbeOptions {
   bool all = false;
   int sample = 0;
   std::uint64_t seed = 1;
-  double g = 1e-9, dt = 1e-3, velocity_tol = 1e-6;
+  double g = 1e-9, velocity_tol = 1e-6;
+  double dt = 0.0;                 // 0: default_probe_dt(method, g)
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
@@ -62,7 +63,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.sample = o.sample;
   s.seed = o.seed;
   s.nlgs.g = s.kinematic.g = o.g;
-  s.nlgs.dt = o.dt;
+  s.nlgs.dt = o.dt > 0.0 ? o.dt : default_probe_dt(s.method, o.g);
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
   validate(s);
@@ -382,7 +383,10 @@ void add_probe_command(CLI::App& app) {
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
   cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str()->check(positive_number());
-  cmd->add_option("--dt", o->dt, "nlgs, lemke, cd: time step of the probe")->capture_default_str()->check(positive_number());
+  cmd->add_option("--dt", o->dt,
+                  "nlgs, lemke, cd: time step of the probe (default: lemke, cd sqrt(g / 1e-5), the "
+                  "quasi-static limit, 1e-2 at g = 1e-9; nlgs 1e-3)")
+      ->check(positive_number());
   cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")
       ->capture_default_str()->check(positive_number());
   cmd->add_option("--max-sweeps", o->max_sweeps, "nlgs: sweeps at most per probe")->capture_default_str()->check(positive_number());

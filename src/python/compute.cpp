@@ -124,12 +124,12 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
   return run_compaction(std::move(p), a);
 }
 
-CampaignSettings probe_settings(const Packing& p, const std::string& method, double g, double dt,
-                                double velocity_tol, long long max_sweeps) {
+CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
+                                std::optional<double> dt, double velocity_tol, long long max_sweeps) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.nlgs.g = s.kinematic.g = g;
-  s.nlgs.dt = dt;
+  s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
   s.nlgs.max_sweeps = max_sweeps;
   validate(s);
@@ -140,8 +140,8 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 // probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
 // in the order of contacts=[...].
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
-                 const std::string& method, double g, double dt, double velocity_tol, long long max_sweeps,
-                 int threads) {
+                 const std::string& method, double g, std::optional<double> dt, double velocity_tol,
+                 long long max_sweeps, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
@@ -293,10 +293,11 @@ void bind_compute(py::module_& m) {
         "is not changed");
   m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
-        py::arg("g") = cd.nlgs.g, py::arg("dt") = cd.nlgs.dt, py::arg("velocity_tol") = cd.nlgs.velocity_tol,
+        py::arg("g") = cd.nlgs.g, py::arg("dt") = py::none(), py::arg("velocity_tol") = cd.nlgs.velocity_tol,
         py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
-        "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`");
+        "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
+        "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3)");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -153,6 +153,11 @@ CampaignSettings campaign_settings_for(const Packing& p) {
   return s;
 }
 
+double default_probe_dt(ProbeMethod method, double g) {
+  if (method == ProbeMethod::kLemke || method == ProbeMethod::kCd) return std::sqrt(g / kQuasiStaticInertia);
+  return ProbeSettings{}.dt;
+}
+
 void validate(const CampaignSettings& s) {
   const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||

@@ -38,6 +38,19 @@ CdPathStart cd_start_from_name(const std::string& name);
 const char* method_name(ProbeMethod method);
 ProbeMethod method_from_name(const std::string& name);
 
+// The quasi-static limit of the probe step (docs/probe.md, "The quasi-static limit"). The
+// step depends on g and dt only through g / dt^2 (R_max / t0^2), the size of its inertial
+// term m g / dt^2; at g / dt^2 = kQuasiStaticInertia F_crit lies within ~0.2 % of its limit
+// g / dt^2 -> 0 and u / g within ~3e-5 (500 disks, mu = 0, 0.1, 1), against 5-17 % and up
+// to 55 % at the nlgs default (g = 1e-9, dt = 1e-3: g / dt^2 = 1e-3).
+inline constexpr double kQuasiStaticInertia = 1e-5;
+
+// The probe's time step where none is given: for the exact methods (lemke, cd) the one that
+// puts g / dt^2 at kQuasiStaticInertia, dt = sqrt(g / kQuasiStaticInertia) (1e-2 at
+// g = 1e-9); for nlgs ProbeSettings::dt (1e-3: its sweeps converge at a small dt only); lp
+// has no time step (the same value as nlgs, unused).
+double default_probe_dt(ProbeMethod method, double g);
+
 struct CampaignSettings {
   ProbeMethod method = ProbeMethod::kLp;
   ProbeSettings nlgs;                   // g, dt, tolerances, model of the NLGS, Lemke, cd probes
