@@ -22,9 +22,9 @@ PY = sys.executable or "/usr/bin/python3"
 # per packing (a seeded subset; 0 = every force-carrying contact).
 # cd_sample: contacts per packing probed by the exact probe (`--method cd --cd-start
 # cd_start`) and, for the comparison, by lp on the same contacts (0: none), on the packings of
-# N <= cd_max_n: the exact probe by the compliant continuation costs 1-4 s of CPU per probe
-# at 500 disks with friction, ~50 s at 1000 and ~1000 s at 2000 (docs/probe.md, "Where the
-# path starts" and "What limits it"). cd_start: compliant (exact on 1789 of 1800 probes at 500
+# N <= cd_max_n: the exact probe by the compliant continuation costs 1-10 s of CPU per probe
+# at 500 disks with friction at its default, quasi-static dt, ~50 s at 1000 and ~1000 s at
+# 2000 (docs/probe.md, "Where the path starts", "The quasi-static limit", "What limits it"). cd_start: compliant (exact on 1789 of 1800 probes at 500
 # disks, "300 probes per packing"), or static (the branch from the static network).
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
