@@ -150,6 +150,25 @@ TEST_F(CliProbe, TheExactProbeDefaultsToTheQuasiStaticTimeStep) {
   EXPECT_DOUBLE_EQ(read_json_file(nlgs / "probe_summary.json")["settings"]["dt"].get<double>(), 1e-3);
 }
 
+TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
+  // A cd campaign stopped at dt = 1e-3 (exit 3) is not resumed at the default dt: the error
+  // names the setting and both values, the checkpoint is kept, and the same command with
+  // --dt 1e-3 finishes it to the bytes of an uninterrupted run.
+  const fs::path out = root_ / "resume-dt", whole = root_ / "whole-dt";
+  for (const fs::path& d : {out, whole}) fs::create_directories(d);
+  const std::string args = " --sample 4 --method cd --quiet --threads 1 --out ";
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(out) + " --dt 1e-3 --stop-after 2");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("other settings (dt: 0.001 there, 0.01 here)"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(out / "probe_checkpoint.json"));
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --dt 1e-3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(whole) + " --dt 1e-3").exit_code, 0);
+  EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
+}
+
 TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutionsHere) {
   // --method cd --cd-start compliant on a seeded sample of p50-mu0.1: every probe exact, and
   // on this packing the same F_crit as the path from the static network within 1e-3

@@ -7,6 +7,7 @@
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <random>
 
 #include "unjam/analysis/contact_frame.hpp"
@@ -389,8 +390,25 @@ std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, c
   if (j.is_discarded() || !j.is_object()) throw Error(name + " is not valid JSON; remove it to start over");
   const auto packing = j.find("packing");
   if (packing == j.end() || *packing != packing_fingerprint(p)) return std::nullopt;
-  if (j.value("settings", nlohmann::json{}) != settings)
-    throw Error(name + " belongs to a run with other settings; remove it to start over");
+  const nlohmann::json saved = j.value("settings", nlohmann::json{});
+  if (saved != settings) {
+    // Name the settings that differ, so that the run can be repeated with the checkpoint's
+    // (e.g. --dt) instead of started over.
+    std::string diff;
+    if (saved.is_object()) {
+      std::set<std::string> keys;
+      for (auto it = saved.begin(); it != saved.end(); ++it) keys.insert(it.key());
+      for (auto it = settings.begin(); it != settings.end(); ++it) keys.insert(it.key());
+      for (const std::string& k : keys) {
+        const auto a = saved.find(k), b = settings.find(k);
+        const std::string was = a == saved.end() ? "none" : a->dump(), now = b == settings.end() ? "none" : b->dump();
+        if (was != now) diff += (diff.empty() ? " (" : ", ") + k + ": " + was + " there, " + now + " here";
+      }
+      if (!diff.empty()) diff += ")";
+    }
+    throw Error(name + " belongs to a run with other settings" + diff +
+                "; give its settings to resume it, or remove it to start over");
+  }
   const auto state = j.find("state");
   const auto sum = j.find("state_fnv1a64");
   if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
