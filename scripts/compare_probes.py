@@ -61,12 +61,11 @@ import os
 import shlex
 import statistics
 import sys
-import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from unjam_plot import (UserError, read_csv, read_json, require_dir, run_main,  # noqa: E402
-                        save_figure, warn)
+                        save_figure, warn, write_file_atomic)
 
 # Residual of the cd step (units of g) up to which it has a solution, and is exact.
 SOLVED_RESIDUAL = 1e-3
@@ -289,22 +288,7 @@ def compare_pair(cd, lp, label):
 
 def write_atomic(path, text):
     """text to path: a temporary file beside it, then os.replace (UserError if it fails)."""
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)),
-                               prefix="." + os.path.basename(path) + ".", suffix=".tmp")
-    try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except OSError as e:
-        raise UserError(f"{path}: cannot write: {e.strerror or e}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_file_atomic(path, lambda f: f.write(text))
 
 
 def _csv_field(v):

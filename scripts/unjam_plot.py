@@ -314,8 +314,9 @@ def default_out(directory, name):
     return os.path.join(directory, name)
 
 
-def save_figure(fig, out):
-    """Write fig as PNG (dpi 150) atomically: a temporary file beside out, then os.replace."""
+def write_file_atomic(out, write, binary=False):
+    """Write out atomically: write(f) fills a temporary file beside out (mode 0666 & ~umask,
+    fsync'ed), which then replaces out; UserError if any step fails, no temporary left."""
     out_dir = os.path.dirname(os.path.abspath(out))
     if not os.path.isdir(out_dir):
         raise UserError(f"{out}: output directory {out_dir} does not exist")
@@ -325,8 +326,9 @@ def save_figure(fig, out):
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
-        with os.fdopen(fd, "wb") as f:
-            fig.savefig(f, dpi=DPI, format="png")
+        with (os.fdopen(fd, "wb") if binary
+              else os.fdopen(fd, "w", encoding="utf-8", newline="")) as f:
+            write(f)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, out)
@@ -335,6 +337,11 @@ def save_figure(fig, out):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def save_figure(fig, out):
+    """Write fig as PNG (dpi 150) atomically (write_file_atomic) and print its path."""
+    write_file_atomic(out, lambda f: fig.savefig(f, dpi=DPI, format="png"), binary=True)
     print(out)
 
 
