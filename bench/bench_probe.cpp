@@ -6,9 +6,11 @@
 //                         (one thread): s per probe; F_crit >= F_cont (the LP maximum is at
 //                         least the packing's own force), the field opens the pair by g with
 //                         no unilateral violation. Counter model_s: building the LP model.
-//   BM_CdPath/N/start     probe_cd_path (the exact CD step, --method cd) on the same contacts,
+//   BM_CdPath/N/start/qs  probe_cd_path (the exact CD step, --method cd) on the same contacts,
 //                         one thread, CPU time, from the static network (start 0) or by the
-//                         compliant continuation (start 1, --cd-start compliant): s per
+//                         compliant continuation (start 1, --cd-start compliant), at
+//                         dt = 1e-3 (qs 0) or the quasi-static default dt (qs 1,
+//                         default_probe_dt: 1e-2 at g = 1e-9): s per
 //                         probe; counters exact (residual <= 1e-6 g),
 //                         no_solution, pieces and factorizations per probe; every solution
 //                         returned must pass kMaxPathResidual and open the pair by g to
@@ -29,6 +31,7 @@
 #include "unjam/lp/force_lp.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
+#include "unjam/probe/probe_campaign.hpp"
 
 namespace {
 
@@ -91,12 +94,14 @@ void BM_CdPath(benchmark::State& state) {
   omp_set_num_threads(1);
   CdPathSettings ps;
   if (state.range(1) == 1) ps.start = CdPathStart::compliant;
+  ProbeSettings step;
+  if (state.range(2) == 1) step.dt = default_probe_dt(ProbeMethod::kCd, step.g);
   std::vector<CdStepSolution> results;
   std::vector<CdPathStats> stats(contacts.size());
   for (auto _ : state) {
     results.clear();
     for (std::size_t i = 0; i < contacts.size(); ++i)
-      results.push_back(probe_cd_path(p, contacts[i], ProbeSettings{}, ps, &stats[i]));
+      results.push_back(probe_cd_path(p, contacts[i], step, ps, &stats[i]));
   }
   int exact = 0, none = 0, pieces = 0, factorizations = 0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
@@ -124,7 +129,7 @@ void BM_CdPath(benchmark::State& state) {
                                       benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_CdPath)
-    ->ArgNames({"N", "start"})->Args({500, 0})->Args({500, 1})
+    ->ArgNames({"N", "start", "qs"})->Args({500, 0, 0})->Args({500, 1, 0})->Args({500, 1, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 
