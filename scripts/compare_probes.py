@@ -64,8 +64,8 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_plot import (UserError, read_csv, read_json, require_dir, run_main,  # noqa: E402
-                        save_figure, warn, write_file_atomic)
+from unjam_plot import (UserError, json_number, read_csv, read_json, require_dir,  # noqa: E402
+                        run_main, save_figure, warn, write_file_atomic)
 
 # Residual of the cd step (units of g) up to which it has a solution, and is exact.
 SOLVED_RESIDUAL = 1e-3
@@ -111,12 +111,10 @@ def parse(argv):
 # Reading
 
 
-def _optional_number(summary, key):
-    """summary[key] as a float, NaN where missing, null, NaN or not a number."""
-    v = summary.get(key)
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return math.nan
-    return float(v)
+def _optional_number(campaign, key):
+    """The campaign summary's number `key`, NaN where it is missing or null (a failed fit)."""
+    return json_number(campaign["summary"], key, campaign["summary_path"], required=False,
+                       default=math.nan)
 
 
 def _integer_column(t, name, path):
@@ -159,7 +157,7 @@ def read_campaign(directory, method):
         rows[k] = {"a": a[i], "b": b[i], "f_cont": float(t["f_cont"][i]),
                    "f_crit": float(t["f_crit"][i]), "sweeps": sweeps[i],
                    "residual": float(t["residual"][i])}
-    return {"dir": directory, "summary": summary, "rows": rows}
+    return {"dir": directory, "summary": summary, "summary_path": spath, "rows": rows}
 
 
 def _same_value(x, y):
@@ -214,7 +212,7 @@ def compare_pair(cd, lp, label):
             warn(f"{name}: {len(only)} contact{'s' if len(only) > 1 else ''} probed only by "
                  f"{method} ({run['dir']}) ignored: {_list(only)}")
 
-    packing = {"packing": s_cd["packing"], "mu": _optional_number(s_cd, "mu"),
+    packing = {"packing": s_cd["packing"], "mu": _optional_number(cd, "mu"),
                "N": s_cd.get("N"), "seed": s_cd.get("seed")}
     rows, ratios, no_lp = [], [], []
     sum_cont = sum_cd = sum_lp = 0.0
@@ -272,10 +270,10 @@ def compare_pair(cd, lp, label):
         "ratio_q1": q1, "ratio_q3": q3,
         "ratio_min": min(ratios) if ratios else math.nan,
         "ratio_max": max(ratios) if ratios else math.nan,
-        "alpha_lp": _optional_number(s_lp, "alpha"),
-        "alpha_lp_err": _optional_number(s_lp, "alpha_err"),
-        "alpha_cd": _optional_number(s_cd, "alpha"),
-        "alpha_cd_err": _optional_number(s_cd, "alpha_err"),
+        "alpha_lp": _optional_number(lp, "alpha"),
+        "alpha_lp_err": _optional_number(lp, "alpha_err"),
+        "alpha_cd": _optional_number(cd, "alpha"),
+        "alpha_cd_err": _optional_number(cd, "alpha_err"),
         "pieces_median": float(statistics.median(cd["rows"][k]["sweeps"] for k in shared)),
         "cpu_s_per_probe_cd": busy / probes_cd,
     }

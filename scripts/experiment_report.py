@@ -83,9 +83,9 @@ def findings(agg, fixed_agg, n_max):
     return out
 
 
-def exact_probe_section(path, start="compliant"):
-    """Report lines comparing the exact probe (cd) with lp on the same contacts, from
-    OUT/exact-probe.csv (none when the table does not exist)."""
+def exact_probe_section(path, start):
+    """Report lines comparing the exact probe (cd, from `start`) with lp on the same contacts,
+    from OUT/exact-probe.csv (none when the table does not exist)."""
     if not os.path.isfile(path):
         return []
     groups = {}

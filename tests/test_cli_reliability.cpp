@@ -21,6 +21,7 @@
 
 #include "cli_run.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -93,6 +94,25 @@ std::string checkpoint_of(const fs::path& dir) {
   ::waitpid(pid, nullptr, 0);
   fs::remove(ckpt);
   return saved;
+}
+
+TEST(CheckpointSettings, OtherSettingsAreNamedWithBothValues) {
+  // The check behind probe and bounds checkpoints: equal settings pass; otherwise every key
+  // that differs is named with the checkpoint's and this run's value (a missing key: none).
+  const nlohmann::json saved = {{"dt", 0.001}, {"g", 1e-9}, {"method", "cd"}};
+  EXPECT_NO_THROW(require_same_settings(saved, saved, "c.json"));
+  nlohmann::json now = saved;
+  now["dt"] = 0.01;
+  now["cd_start"] = "compliant";
+  try {
+    require_same_settings(saved, now, "c.json");
+    FAIL() << "other settings accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "c.json belongs to a run with other settings (cd_start: none there, \"compliant\" here, "
+              "dt: 0.001 there, 0.01 here); give its settings to resume it, or remove it to start over");
+  }
+  EXPECT_THROW(require_same_settings(nlohmann::json(), saved, "c.json"), Error);
 }
 
 TEST_F(CliReliability, ProbeCheckpointOfAnotherPackingIsSetAside) {

@@ -22,6 +22,7 @@
 #include "unjam/campaign/distributor.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/rank_loads_json.hpp"
@@ -216,8 +217,7 @@ std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, co
   if (!std::filesystem::exists(file)) return std::nullopt;
   const auto j = nlohmann::json::parse(read_file(file), nullptr, false);
   if (j.is_discarded()) throw Error(file.string() + " is not valid JSON; remove it to start over");
-  if (j.value("settings", nlohmann::json{}) != settings)
-    throw Error(file.string() + " belongs to a run with other settings; remove it to start over");
+  require_same_settings(j.value("settings", nlohmann::json{}), settings, file.string());
   ForceBounds b;
   b.fn_min = values_of(j.at("fn_min"));
   b.fn_max = values_of(j.at("fn_max"));

@@ -461,7 +461,8 @@ class StepPath {
     return Z;
   }
 
-  // The residuals Y - S Z of the columns `cols` (one or two), accumulated in long double.
+  // The residuals Y - S Z of the columns `cols` (one or two: at most kColumns), accumulated in
+  // long double.
   MatrixXld residual(const MatrixXld& Y, const Eigen::MatrixXd& Z, const std::vector<int>& cols) const {
     MatrixXld R = cols.size() == 1 ? residual_rows<1>(Y, Z, cols) : residual_rows<2>(Y, Z, cols);
     for (std::size_t j = 0; j < cols.size(); ++j)

@@ -7,11 +7,11 @@
 #include <memory>
 #include <numeric>
 #include <optional>
-#include <set>
 #include <random>
 
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/json_integer.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -390,25 +390,7 @@ std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, c
   if (j.is_discarded() || !j.is_object()) throw Error(name + " is not valid JSON; remove it to start over");
   const auto packing = j.find("packing");
   if (packing == j.end() || *packing != packing_fingerprint(p)) return std::nullopt;
-  const nlohmann::json saved = j.value("settings", nlohmann::json{});
-  if (saved != settings) {
-    // Name the settings that differ, so that the run can be repeated with the checkpoint's
-    // (e.g. --dt) instead of started over.
-    std::string diff;
-    if (saved.is_object()) {
-      std::set<std::string> keys;
-      for (auto it = saved.begin(); it != saved.end(); ++it) keys.insert(it.key());
-      for (auto it = settings.begin(); it != settings.end(); ++it) keys.insert(it.key());
-      for (const std::string& k : keys) {
-        const auto a = saved.find(k), b = settings.find(k);
-        const std::string was = a == saved.end() ? "none" : a->dump(), now = b == settings.end() ? "none" : b->dump();
-        if (was != now) diff += (diff.empty() ? " (" : ", ") + k + ": " + was + " there, " + now + " here";
-      }
-      if (!diff.empty()) diff += ")";
-    }
-    throw Error(name + " belongs to a run with other settings" + diff +
-                "; give its settings to resume it, or remove it to start over");
-  }
+  require_same_settings(j.value("settings", nlohmann::json{}), settings, name);
   const auto state = j.find("state");
   const auto sum = j.find("state_fnv1a64");
   if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
