@@ -23,10 +23,11 @@ PY = sys.executable or "/usr/bin/python3"
 # cd_sample: contacts per packing probed by the exact probe (`--method cd --cd-start
 # cd_start`) and, for the comparison, by lp on the same contacts (0: none), on the packings of
 # N <= cd_max_n: the exact probe by the compliant continuation costs 1-40 s of CPU per probe
-# at 500 disks with friction at its default, quasi-static dt, ~50 s at 1000 and ~1000 s at
-# 2000 (docs/probe.md, "Where the path starts", "The quasi-static limit", "What limits
-# it"). cd_start: compliant (exact on 1789 of 1800 probes at 500 disks, "300 probes per
-# packing"), or static (the branch from the static network).
+# at 500 disks with friction at its default, quasi-static dt, 130-150 s at 1000 and 500 s or
+# more at 2000 (docs/benchmarks.md, section 10, "Against N, and against the targets";
+# docs/probe.md, "Where the path starts", "What limits it"). cd_start: compliant (exact on
+# 1789 of 1800 probes at 500 disks, "300 probes per packing"), or static (the branch from the
+# static network; without friction the faster, with the same F_crit).
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
              "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant"},
