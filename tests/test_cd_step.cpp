@@ -351,6 +351,13 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   EXPECT_EQ(stopped.restarts, 0);
   EXPECT_GT(stopped.compliance_end, 1e-3);
   EXPECT_LT(stopped.compliance_end, 0.1);
+  ASSERT_EQ(stopped.paths.size(), 1u);  // the one path, as followed
+  EXPECT_EQ(stopped.paths[0].compliance, 0.1);
+  EXPECT_EQ(stopped.paths[0].compliance_end, stopped.compliance_end);
+  EXPECT_EQ(stopped.paths[0].lambda_max, 1.0);
+  EXPECT_GT(stopped.paths[0].residual, kMaxPathResidual);
+  EXPECT_EQ(stopped.paths[0].failure, "loop");  // its own end; the probe's is "inexact"
+  EXPECT_EQ(stopped.failure, "inexact");
   CdPathSettings restarted;
   restarted.start = CdPathStart::compliant;
   CdPathStats stats;
@@ -360,12 +367,22 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   EXPECT_EQ(stats.compliance_end, 0.0);
   EXPECT_LE(s.residual.max(), kExactStepTolerance);
   EXPECT_GT(s.result.f_crit, 0.0);
+  // The log of paths: the stopped one, then the restart a tenth below where it stopped.
+  ASSERT_EQ(stats.paths.size(), 2u);
+  EXPECT_EQ(stats.paths[0].compliance_end, stopped.compliance_end);
+  EXPECT_NE(stats.paths[0].failure, "");
+  EXPECT_DOUBLE_EQ(stats.paths[1].compliance, stopped.compliance_end / 10.0);
+  EXPECT_EQ(stats.paths[1].compliance_end, 0.0);
+  EXPECT_EQ(stats.paths[1].failure, "");
+  EXPECT_EQ(stats.paths[1].residual, s.residual.max());
+  EXPECT_EQ(stats.paths[1].pieces, stats.pieces);
   // Without retries there is no restart either.
   CdPathSettings no_retry = restarted;
   no_retry.retry = false;
   CdPathStats single;
   probe_cd_path(p, 14, ProbeSettings{}, no_retry, &single);
   EXPECT_EQ(single.attempts, 1);
+  EXPECT_EQ(single.paths.size(), 1u);
   // A divisor that would not lower the compliance is refused.
   CdPathSettings bad = restarted;
   bad.restart_divisor = 1.0;

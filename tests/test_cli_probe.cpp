@@ -213,8 +213,16 @@ TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {
   EXPECT_NE(r.output.find("through the static network closes on itself, turning back at 2.29e-05 of the opening"),
             std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--cd-start compliant"), std::string::npos) << r.output;
+  // Every path followed is listed: the first and its two retries at other compliances.
+  EXPECT_NE(r.output.find("path 1 at compliance 1e-07: stopped at 2.29e-05 of the opening (loop); no solution"),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 3 at compliance 1e-08: "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("path 4 "), std::string::npos) << r.output;
   r = run_tool("probe " + q(p200) + " --contact 49 --method cd --dt 1e-3 --cd-start compliant --threads 1 --out " + q(out));
   EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 0.1: full opening; lowered to the rigid step; residual "),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("path 2 "), std::string::npos) << r.output;
 }
 
 }  // namespace unjam

@@ -126,6 +126,32 @@ std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
          stats.failure + "; docs/probe.md, \"What limits it\"";
 }
 
+// One line per path the cd probe followed (CdPathStats::paths): where it started, how far it
+// got and how it ended, so that a user sees why a probe is or is not exact.
+void print_cd_paths(const CdPathStats& stats) {
+  for (std::size_t i = 0; i < stats.paths.size(); ++i) {
+    const CdPathAttempt& a = stats.paths[i];
+    char line[256];
+    int n = std::snprintf(line, sizeof line, "  path %zu at compliance %.3g: ", i + 1, a.compliance);
+    const auto add = [&](const char* fmt, auto... v) {
+      if (n < int(sizeof line)) n += std::snprintf(line + n, sizeof line - n, fmt, v...);
+    };
+    if (a.lambda_max < 1.0)
+      add("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.empty() ? "?" : a.failure.c_str());
+    else if (a.compliance_end > 0.0)
+      add("full opening; %d lowerings, stopped at compliance %.3g (%s)", a.lowerings, a.compliance_end,
+          a.failure.c_str());
+    else
+      add("full opening%s", a.lowerings > 0 ? "; lowered to the rigid step" : "");
+    if (a.residual == kNoSolution)
+      add("; no solution");
+    else
+      add("; residual %.2e g", a.residual);
+    add("; %d pieces", a.pieces);
+    std::printf("%s\n", line);
+  }
+}
+
 // Why a single probe is not a solution, and what the user can do about it.
 std::string not_converged_message(const ProbeResult& r, const std::string& method, const std::string& cd_hint) {
   char residual[64];
@@ -161,6 +187,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
+  print_cd_paths(stats);
   if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd.start)));
 }
 

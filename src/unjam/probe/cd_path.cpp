@@ -861,13 +861,17 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : 3;
   double start = ps.compliant_start;  // soft: the compliance of the next path from the static network
+  std::vector<CdPathAttempt> paths;
   for (int attempt = 0; attempt < attempts; ++attempt) {
     if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)))) break;
     CdPathStats stats;
     CdPathSettings at = ps;
     if (!soft) at.compliance = compliances[attempt];
-    CdStepSolution sol =
-        follow(pb, packing, at, guess, soft ? start : at.compliance, at.compliance, stats, settings.cancel);
+    const double path_compliance = soft ? start : at.compliance;
+    CdStepSolution sol = follow(pb, packing, at, guess, path_compliance, at.compliance, stats, settings.cancel);
+    paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
+                     sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
+                     stats.failure});
     // restart_divisor below where this lowering stopped (or this path's start, where it failed),
     // never below the rigid compliance itself: a path there is the static start's.
     if (soft)
@@ -883,6 +887,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
   }
   best_stats.restarts = soft ? best_stats.attempts - 1 : 0;  // every attempt after the first
+  best_stats.paths = std::move(paths);
   // A path that ends on a nearly singular state set returns forces far from any solution;
   // those are no solution, not a probe to average.
   if (best.f.size() > 0 && !(best.residual.max() <= kMaxPathResidual)) {

@@ -37,6 +37,7 @@
 // formula between factorisations; every solve is refined with residuals in extended
 // precision, since the compliance leaves cond(S) ~ 1e7-1e10 (docs/probe.md, "The method").
 #include <string>
+#include <vector>
 
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/cd_step.hpp"
@@ -74,6 +75,18 @@ struct CdPathSettings {
   int max_restarts = 6;
 };
 
+// One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
+// where it started and ended, for the user to see why a probe is or is not exact.
+struct CdPathAttempt {
+  double compliance = 0.0;      // compliance of its path from the start (as CdPathSettings::compliance)
+  double compliance_end = 0.0;  // compliant: where its lowering stopped (0: it did not stop)
+  double lambda_max = 0.0;      // the largest opening its path reached (1: the full opening g)
+  double residual = 0.0;        // of its best forces (g, F0); kNoSolution where it has none
+  int pieces = 0;
+  int lowerings = 0;
+  std::string failure;          // as CdPathStats::failure ("" where it reached its end)
+};
+
 struct CdPathStats {
   int pieces = 0;             // linear pieces of the path (state changes)
   int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
@@ -89,6 +102,7 @@ struct CdPathStats {
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual)
+  std::vector<CdPathAttempt> paths;  // every path followed, in order (paths.size() == attempts)
 };
 
 // Forces whose residual (g, F0) exceeds this are no solution; between kExactStepTolerance
