@@ -80,7 +80,7 @@ struct CdPathSettings {
 struct CdPathAttempt {
   double compliance = 0.0;      // compliance of its path from the start (as CdPathSettings::compliance)
   double compliance_end = 0.0;  // compliant: where its lowering stopped (0: it did not stop)
-  double lambda_max = 0.0;      // the largest opening its path reached (1: the full opening g)
+  double lambda_max = 0.0;      // the largest lambda its path reached (fraction of g; 1: the full opening)
   double residual = 0.0;        // of its best forces (g, F0); kNoSolution where it has none
   int pieces = 0;
   int lowerings = 0;
