@@ -131,24 +131,18 @@ std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
 void print_cd_paths(const CdPathStats& stats) {
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
-    char line[256];
-    int n = std::snprintf(line, sizeof line, "  path %zu at compliance %.3g: ", i + 1, a.compliance);
-    const auto add = [&](const char* fmt, auto... v) {
-      if (n < int(sizeof line)) n += std::snprintf(line + n, sizeof line - n, fmt, v...);
-    };
+    std::printf("  path %zu at compliance %.3g: ", i + 1, a.compliance);
     if (a.lambda_max < 1.0)
-      add("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.empty() ? "?" : a.failure.c_str());
+      std::printf("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.c_str());
     else if (a.compliance_end > 0.0)
-      add("full opening; %d lowerings, stopped at compliance %.3g (%s)", a.lowerings, a.compliance_end,
-          a.failure.c_str());
+      std::printf("full opening; %d lowerings, stopped at compliance %.3g (%s)", a.lowerings, a.compliance_end,
+                  a.failure.c_str());
     else
-      add("full opening%s", a.lowerings > 0 ? "; lowered to the rigid step" : "");
+      std::printf("full opening%s", a.lowerings > 0 ? "; lowered to the rigid step" : "");
     if (a.residual == kNoSolution)
-      add("; no solution");
+      std::printf("; no solution; %d pieces\n", a.pieces);
     else
-      add("; residual %.2e g", a.residual);
-    add("; %d pieces", a.pieces);
-    std::printf("%s\n", line);
+      std::printf("; residual %.2e g; %d pieces\n", a.residual, a.pieces);
   }
 }
 

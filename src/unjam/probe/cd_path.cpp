@@ -876,18 +876,16 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     // never below the rigid compliance itself: a path there is the static start's.
     if (soft)
       start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / ps.restart_divisor, ps.compliance);
-    stats.attempts = best_stats.attempts + 1;
     const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
-    if (better || best_stats.attempts == 0) {
+    if (better || paths.size() == 1) {
       best = std::move(sol);
       best_stats = stats;
-    } else {
-      best_stats.attempts = stats.attempts;
     }
     if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
   }
-  best_stats.restarts = soft ? best_stats.attempts - 1 : 0;  // every attempt after the first
   best_stats.paths = std::move(paths);
+  best_stats.attempts = int(best_stats.paths.size());
+  best_stats.restarts = soft ? best_stats.attempts - 1 : 0;  // every attempt after the first
   // A path that ends on a nearly singular state set returns forces far from any solution;
   // those are no solution, not a probe to average.
   if (best.f.size() > 0 && !(best.residual.max() <= kMaxPathResidual)) {
