@@ -148,8 +148,8 @@ def signature_defaults(function):
                           "p-ext": "p_ext", "phi-gas": "phi_gas", "dt": "dt", "m-lambda": "m_lambda",
                           "tol": "tol", "max-sweeps": "max_sweeps", "static-tol": "static_tol",
                           "max-steps": "max_steps"}),
-    ("probe", unjam.probe, {"method": "method", "g": "g",
-                            "velocity-tol": "velocity_tol", "max-sweeps": "max_sweeps"}),
+    ("probe", unjam.probe, {"method": "method", "g": "g", "velocity-tol": "velocity_tol",
+                            "max-sweeps": "max_sweeps", "cd-start": "cd_start"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -168,6 +168,27 @@ def test_the_exact_probe_defaults_to_the_quasi_static_time_step(p50):
     assert default.f_crit != unjam.probe(p50, contact=0, method="cd", dt=1e-3).f_crit
     assert (unjam.probe(p50, contact=0, method="cd", g=1e-7).f_crit
             == pytest.approx(unjam.probe(p50, contact=0, method="cd", g=1e-7, dt=0.1).f_crit))
+
+
+def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
+    # cd_start as `unjam probe --cd-start`: the same field and F_crit, bit for bit. On contact 14
+    # of p200-mu1 the compliant continuation is exact (docs/probe.md, "Where the path starts")
+    # and the static network's path ends elsewhere (F_crit 2.36 against 2.01 F0, residual
+    # 1.4e-6 g), so the start is not ignored.
+    fixture = str(Path(__file__).parent / "fixtures" / "p200-mu1")
+    p = unjam.read_packing(fixture)
+    tool("probe", fixture, "--contact", 14, "--method", "cd", "--cd-start", "compliant", "--out", tmp_path)
+    rows = read_csv(tmp_path / "probe-14.csv")
+    compliant = unjam.probe(p, contact=14, method="cd", cd_start="compliant")
+    assert [[float(x["ux"]), float(x["uy"])] for x in rows] == compliant.u.tolist()
+    forces = {int(x["contact"]): float(x["fn"]) for x in read_csv(tmp_path / "probe-14-forces.csv")}
+    assert forces[14] == compliant.f_crit and compliant.converged
+    static = unjam.probe(p, contact=14, method="cd")
+    assert abs(static.f_crit - compliant.f_crit) > 0.1 * compliant.f_crit
+    with pytest.raises(unjam.Error, match="must be static, lp or compliant"):
+        unjam.probe(p, contact=14, method="cd", cd_start="soft")
+    with pytest.raises(unjam.Error, match="cd_start applies to method='cd' only"):
+        unjam.probe(p, contact=14, method="lp", cd_start="compliant")
 
 
 def test_bad_arguments_raise(p50, tmp_path):

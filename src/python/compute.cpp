@@ -125,9 +125,13 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
 }
 
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
-                                std::optional<double> dt, double velocity_tol, long long max_sweeps) {
+                                std::optional<double> dt, double velocity_tol, long long max_sweeps,
+                                const std::string& cd_start) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
+  s.cd.start = cd_start_from_name(cd_start);
+  if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
+    throw Error("cd_start applies to method='cd' only");
   s.nlgs.g = s.kinematic.g = g;
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
@@ -141,10 +145,10 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 // in the order of contacts=[...].
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, std::optional<double> dt, double velocity_tol,
-                 long long max_sweeps, int threads) {
+                 long long max_sweeps, const std::string& cd_start, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps);
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   s.nlgs.cancel = [&poll] { return poll(); };
@@ -294,10 +298,13 @@ void bind_compute(py::module_& m) {
   m.def("probe", &probe, py::arg("packing"), py::kw_only(), py::arg("contact") = py::none(),
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
         py::arg("g") = cd.nlgs.g, py::arg("dt") = py::none(), py::arg("velocity_tol") = cd.nlgs.velocity_tol,
-        py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("threads") = 0,
+        py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("cd_start") = cd_start_name(cd.cd.start),
+        py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
-        "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3)");
+        "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
+        "cd_start: where the cd method's path starts, 'static', 'compliant' or 'lp' "
+        "(`unjam probe --cd-start`; docs/probe.md, \"Where the path starts\")");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -1,0 +1,239 @@
+"""The exact probe's field against the lp probe's, contact by contact.
+
+Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
+                     (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
+                     [--cd-start static|compliant] [--g G] [--dt DT] [--threads T]
+                     [--chunk C] [--out DIR]
+
+The lp probe (`--method lp`) takes F_crit as the LP maximum and its field from the LP
+optimum's active set; the paper's probe (`--method cd`) solves the contact-dynamics step
+exactly (docs/probe.md). This probes every listed contact by both, through the Python module
+(`unjam.probe`, built into build/release/python), and compares their displacement fields:
+
+  cosine       u_lp . u_cd / (|u_lp| |u_cd|) over the grains' peculiar displacements u (N, 2)
+               (rotations left out): 1 where both move the grains alike, 0 where the fields
+               are unrelated, < 0 where they move them against each other
+  norm_ratio   |u_cd| / |u_lp|
+
+Outputs, in DIR (default PACKING-fields):
+  fields.csv   contact, a, b, f_cont, f_crit_lp, f_crit_cd, residual_cd, exact (cd residual
+               at most 1e-6 g: unjam's own verdict), cosine, norm_ratio. Written after every
+               chunk of --chunk contacts; a run stopped by Ctrl-C resumes from it (the same
+               command skips the contacts it already holds).
+  fields.json  the counts, the cosine's median, quartiles and range over the exact probes,
+               the packing, the settings, the program's version and the command
+  fields.md    the same as a table
+  cosines.png  the cosine's cumulative distribution over the exact probes, and the cosine
+               against F_crit(cd) / F_crit(lp)
+
+--from-campaign takes the contacts of a campaign's probes.csv in its order (e.g. the
+`--sample 300 --seed 1` campaign whose F_crit the docs tabulate), --limit the first M of them.
+Exit codes: 0 done, 1 bad input or a failed probe (its message is printed), 3 interrupted
+(run the same command again to resume).
+"""
+
+import argparse
+import csv
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MODULE_DIR = os.path.join(REPO, "build", "release", "python")
+
+from experiment_stages import write_table  # noqa: E402
+from stage_runner import write_json  # noqa: E402
+import unjam_plot  # noqa: E402
+
+COLUMNS = ["contact", "a", "b", "f_cont", "f_crit_lp", "f_crit_cd", "residual_cd", "exact",
+           "cosine", "norm_ratio"]
+EXACT_TOLERANCE = 1e-6  # g: the cd probe's exact-step tolerance (docs/probe.md)
+
+
+def import_unjam():
+    """The Python module: installed, on PYTHONPATH, or in build/release/python."""
+    try:
+        import unjam
+    except ImportError:
+        sys.path.insert(0, MODULE_DIR)
+        try:
+            import unjam
+        except ImportError:
+            sys.exit(f"field_cosines: the Python module unjam is not built ({MODULE_DIR}; "
+                     "build it: cmake --build build/release -j2)")
+    return unjam
+
+
+def parse(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("packing")
+    sel = ap.add_mutually_exclusive_group(required=True)
+    sel.add_argument("--contacts", type=int, nargs="+", help="the contacts to probe")
+    sel.add_argument("--from-campaign", metavar="PROBES_CSV",
+                     help="the contacts of a campaign's probes.csv, in its order")
+    ap.add_argument("--limit", type=int, help="with --from-campaign: the first M contacts only")
+    ap.add_argument("--cd-start", choices=("static", "compliant"), default="compliant",
+                    help="where the exact probe's path starts (default compliant: docs/probe.md, "
+                         "\"Where the path starts\")")
+    ap.add_argument("--g", type=float, default=1e-9, help="the probe's opening (default 1e-9)")
+    ap.add_argument("--dt", type=float, help="the cd step's time step (default: the quasi-static "
+                    "sqrt(g / 1e-5), as unjam probe --method cd)")
+    ap.add_argument("--threads", type=int, default=0, help="threads (0: all cores)")
+    ap.add_argument("--chunk", type=int, default=8, help="contacts probed between saves (default 8)")
+    ap.add_argument("--out", help="output directory (default: PACKING-fields)")
+    a = ap.parse_args(argv)
+    if not os.path.isfile(os.path.join(a.packing, "meta.json")):
+        ap.error(f"{a.packing} is not a packing directory (no meta.json)")
+    if a.limit is not None and (a.from_campaign is None or a.limit < 1):
+        ap.error("--limit takes a positive count and goes with --from-campaign")
+    for name in ("g", "dt"):
+        v = getattr(a, name)
+        if v is not None and not (0 < v < float("inf")):
+            ap.error(f"--{name} must be a finite number > 0, got {v}")
+    if a.threads < 0 or a.chunk < 1:
+        ap.error("--threads must be >= 0 and --chunk >= 1")
+    a.out = a.out or a.packing.rstrip("/") + "-fields"
+    return a
+
+
+def listed_contacts(a):
+    if a.contacts is not None:
+        ks = a.contacts
+    else:
+        rows = unjam_plot.read_csv(a.from_campaign, ["contact"], min_rows=1)
+        ks = [int(k) for k in rows["contact"]]
+        ks = ks[:a.limit] if a.limit else ks
+    if len(set(ks)) != len(ks):
+        sys.exit("field_cosines: a contact is listed twice")
+    return ks
+
+
+def cosine(u, v):
+    """u . v / (|u| |v|) of two (N, 2) fields; nan where either is zero."""
+    nu, nv = np.linalg.norm(u), np.linalg.norm(v)
+    if nu == 0.0 or nv == 0.0:
+        return float("nan")
+    return float(np.clip(np.dot(u.ravel(), v.ravel()) / (nu * nv), -1.0, 1.0))
+
+
+def read_done(path):
+    if not os.path.isfile(path):
+        return []
+    with open(path, newline="") as f:
+        r = csv.DictReader(f)
+        if r.fieldnames != COLUMNS:
+            sys.exit(f"field_cosines: {path} is not this script's table (columns {r.fieldnames}); "
+                     "move it away or choose another --out")
+        return list(r)
+
+
+def quantiles(values):
+    if not values:
+        return None
+    q = np.quantile(values, [0.0, 0.25, 0.5, 0.75, 1.0])
+    return dict(zip(("min", "q1", "median", "q3", "max"), (float(x) for x in q)))
+
+
+def plot(rows, path, title):
+    import matplotlib.pyplot as plt
+    exact = [r for r in rows if r["exact"] == "1"]
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(9.0, 3.6))
+    c = np.sort([float(r["cosine"]) for r in exact])
+    if len(c):
+        ax0.step(c, np.arange(1, len(c) + 1) / len(c), where="post")
+    ax0.set_xlabel("cosine of the fields, lp against cd")
+    ax0.set_ylabel("fraction of exact probes")
+    ax0.set_xlim(-1.0, 1.0)
+    ax0.grid(alpha=0.3)
+    x = [float(r["f_crit_cd"]) / float(r["f_crit_lp"]) for r in exact if float(r["f_crit_lp"]) > 0]
+    y = [float(r["cosine"]) for r in exact if float(r["f_crit_lp"]) > 0]
+    ax1.plot(x, y, ".", alpha=0.7)
+    ax1.set_xlabel("F_crit(cd) / F_crit(lp)")
+    ax1.set_ylabel("cosine")
+    ax1.set_ylim(-1.0, 1.05)
+    ax1.grid(alpha=0.3)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    unjam_plot.save_figure(fig, path)
+    plt.close(fig)
+
+
+def main(argv):
+    a = parse(argv)
+    unjam = import_unjam()
+    p = unjam.read_packing(a.packing)
+    ks = listed_contacts(a)
+    os.makedirs(a.out, exist_ok=True)
+    table = os.path.join(a.out, "fields.csv")
+    rows = read_done(table)
+    done = {int(r["contact"]) for r in rows}
+    todo = [k for k in ks if k not in done]
+    if done:
+        print(f"resuming: {len(done)} contacts already in {table}", flush=True)
+    common = dict(g=a.g, threads=a.threads)
+    try:
+        for i in range(0, len(todo), a.chunk):
+            chunk = todo[i:i + a.chunk]
+            lp = unjam.probe(p, contacts=chunk, method="lp", **common)
+            cd = unjam.probe(p, contacts=chunk, method="cd", cd_start=a.cd_start, dt=a.dt, **common)
+            for r_lp, r_cd in zip(lp, cd):
+                solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
+                rows.append({
+                    "contact": str(r_cd.contact), "a": str(r_cd.a), "b": str(r_cd.b), "f_cont": repr(r_cd.f_cont),
+                    "f_crit_lp": repr(r_lp.f_crit), "f_crit_cd": repr(r_cd.f_crit) if solved else "",
+                    "residual_cd": repr(r_cd.residual) if solved else "",
+                    "exact": "1" if r_cd.residual <= EXACT_TOLERANCE else "0",
+                    "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
+                    "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
+                    if solved and np.linalg.norm(r_lp.u) > 0 else ""})
+            write_table(table, rows, COLUMNS)
+            print(f"probes {len(rows)} / {len(ks)}", flush=True)
+    except KeyboardInterrupt:
+        write_table(table, rows, COLUMNS)
+        print(f"interrupted: {len(rows)} of {len(ks)} contacts saved in {table}; "
+              "run the same command again to resume", file=sys.stderr)
+        sys.exit(3)
+    except unjam.Error as e:
+        write_table(table, rows, COLUMNS)
+        sys.exit(f"field_cosines: {e}")
+
+    exact = [r for r in rows if r["exact"] == "1"]
+    cos = [float(r["cosine"]) for r in exact if r["cosine"] not in ("", "nan")]
+    ratio = [float(r["norm_ratio"]) for r in exact if r["norm_ratio"] != ""]
+    summary = {
+        "packing": os.path.abspath(a.packing), "N": p.N, "mu": p.mu, "seed": p.seed,
+        "cd_start": a.cd_start, "g": a.g, "dt": a.dt,
+        "probes": len(rows), "exact": len(exact),
+        "without_solution": sum(1 for r in rows if r["f_crit_cd"] == ""),
+        "cosine": quantiles(cos), "norm_ratio": quantiles(ratio),
+        "cosine_above_0.99": sum(1 for c in cos if c > 0.99),
+        "cosine_below_0.5": sum(1 for c in cos if c < 0.5),
+        "program_version": unjam.__version__,
+        "command": " ".join([os.path.basename(sys.executable), *sys.argv]),
+    }
+    write_json(os.path.join(a.out, "fields.json"), summary)
+    q = summary["cosine"]
+    md = ["| probes | exact | cosine median (quartiles) | range | above 0.99 | below 0.5 | norm ratio, median |",
+          "|---|---|---|---|---|---|---|"]
+    if q:
+        md.append(f"| {len(rows)} | {len(exact)} | {q['median']:.3f} ({q['q1']:.3f}–{q['q3']:.3f}) | "
+                  f"{q['min']:.3f}–{q['max']:.3f} | {summary['cosine_above_0.99']} | "
+                  f"{summary['cosine_below_0.5']} | {summary['norm_ratio']['median']:.3f} |")
+    else:
+        md.append(f"| {len(rows)} | {len(exact)} | – | – | – | – | – |")
+    with open(os.path.join(a.out, "fields.md.tmp"), "w") as f:
+        f.write(f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}), exact probes only; "
+                "norm ratio |u_cd| / |u_lp|\n\n")
+        f.write("\n".join(md) + "\n")
+    os.replace(os.path.join(a.out, "fields.md.tmp"), os.path.join(a.out, "fields.md"))
+    plot(rows, os.path.join(a.out, "cosines.png"),
+         f"{os.path.basename(a.packing.rstrip('/'))}: {len(exact)} exact probes of {len(rows)}")
+    med = f"median {q['median']:.3f}" if q else "no exact probe"
+    print(f"{len(rows)} probes, {len(exact)} exact; cosine of the fields lp vs cd: {med} "
+          f"-> {a.out}/fields.csv")
+
+
+if __name__ == "__main__":
+    unjam_plot.run_main(lambda: main(sys.argv[1:]))

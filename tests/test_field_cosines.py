@@ -1,0 +1,115 @@
+"""Tests of scripts/field_cosines.py (the lp probe's field against the exact probe's).
+
+Run by ctest (field_cosines) with PYTHONPATH=build/<preset>/python and UNJAM set to the tool;
+by hand: PYTHONPATH=build/release/python UNJAM=build/release/unjam \
+/usr/bin/python3 -m pytest tests/test_field_cosines.py
+"""
+import csv
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import unjam
+
+REPO = Path(__file__).resolve().parent.parent
+SCRIPT = str(REPO / "scripts" / "field_cosines.py")
+UNJAM = os.environ.get("UNJAM", str(REPO / "build" / "release" / "unjam"))
+P50 = str(REPO / "tests" / "fixtures" / "p50-mu0.1")
+
+
+def run(*args, ok=True):
+    r = subprocess.run([sys.executable, SCRIPT, *map(str, args)], capture_output=True, text=True,
+                       timeout=600)
+    if ok:
+        assert r.returncode == 0, r.stderr
+    return r
+
+
+def rows(out):
+    with open(out / "fields.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
+    ks = [0, 1, 2, 3, 5, 8]
+    run(P50, "--contacts", *ks, "--threads", 1, "--chunk", 4, "--out", tmp_path)
+    p = unjam.read_packing(P50)
+    lp = unjam.probe(p, contacts=ks, method="lp")
+    cd = unjam.probe(p, contacts=ks, method="cd", cd_start="compliant")
+    table = rows(tmp_path)
+    assert [int(r["contact"]) for r in table] == ks
+    for r, a, b in zip(table, lp, cd):
+        assert float(r["f_crit_lp"]) == a.f_crit and float(r["f_crit_cd"]) == b.f_crit
+        assert r["exact"] == ("1" if b.residual <= 1e-6 else "0")
+        u, v = a.u.ravel(), b.u.ravel()
+        assert float(r["cosine"]) == pytest.approx(u @ v / np.sqrt((u @ u) * (v @ v)), abs=1e-14)
+        assert float(r["norm_ratio"]) == pytest.approx(np.linalg.norm(v) / np.linalg.norm(u), rel=1e-14)
+    # At mu = 0.1 on 50 disks the fields are close but not equal (docs/probe.md: 0.96-0.9995).
+    cos = [float(r["cosine"]) for r in table]
+    assert min(cos) > 0.9 and min(cos) < 0.999
+    s = json.loads((tmp_path / "fields.json").read_text())
+    assert s["probes"] == 6 and s["exact"] == sum(r["exact"] == "1" for r in table)
+    assert s["cosine"]["median"] == pytest.approx(np.median([float(r["cosine"]) for r in table
+                                                              if r["exact"] == "1"]))
+    assert s["mu"] == 0.1 and s["N"] == 50 and s["cd_start"] == "compliant"
+    assert (tmp_path / "cosines.png").stat().st_size > 0 and "| 6 |" in (tmp_path / "fields.md").read_text()
+
+
+def test_without_friction_on_an_isostatic_packing_the_fields_are_one(tmp_path):
+    # mu = 0, isostatic: removing the probed contact leaves one mechanism, which both probes
+    # find (docs/probe.md, "The quasi-static limit"); F_crit agrees up to the step's inertia.
+    pk = tmp_path / "p60"
+    subprocess.run([UNJAM, "pack", "--n", "60", "--mu", "0", "--seed", "1", "--tol", "1e-6",
+                    "--max-sweeps", "2000", "--threads", "1", "--out", str(pk)],
+                   check=True, capture_output=True)
+    p = unjam.read_packing(pk)
+    ks = np.flatnonzero(p.contacts.fn > 1e-9 * p.F0)[::6]
+    run(pk, "--contacts", *ks, "--out", tmp_path / "f")
+    table = rows(tmp_path / "f")
+    assert len(table) == len(ks) and all(r["exact"] == "1" for r in table)
+    assert all(float(r["cosine"]) > 1 - 1e-9 for r in table)
+    assert all(float(r["f_crit_cd"]) == pytest.approx(float(r["f_crit_lp"]), rel=2e-3) for r in table)
+
+
+def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
+    run(P50, "--contacts", 0, 1, "--out", tmp_path)
+    table = rows(tmp_path)
+    table[0]["cosine"] = "0.5"  # a marker: the second run must not probe contact 0 again
+    with open(tmp_path / "fields.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(table[0]))
+        w.writeheader()
+        w.writerows(table)
+    r = run(P50, "--contacts", 0, 1, 2, "--out", tmp_path)
+    assert "resuming: 2 contacts" in r.stdout
+    again = rows(tmp_path)
+    assert [x["contact"] for x in again] == ["0", "1", "2"] and again[0]["cosine"] == "0.5"
+
+
+def test_the_contacts_of_a_campaign(tmp_path):
+    subprocess.run([UNJAM, "probe", P50, "--sample", "5", "--seed", "2", "--threads", "1",
+                    "--out", str(tmp_path / "c"), "--quiet"], check=True, capture_output=True)
+    with open(tmp_path / "c" / "probes.csv", newline="") as f:
+        campaign = [r["contact"] for r in csv.DictReader(f)]
+    run(P50, "--from-campaign", tmp_path / "c" / "probes.csv", "--limit", 3, "--out", tmp_path / "f")
+    assert [r["contact"] for r in rows(tmp_path / "f")] == campaign[:3]
+
+
+def test_bad_input_is_refused(tmp_path):
+    r = run(tmp_path, "--contacts", 0, ok=False)
+    assert r.returncode == 2 and "not a packing directory" in r.stderr
+    r = run(P50, "--contacts", 0, "--limit", 2, ok=False)
+    assert r.returncode == 2 and "--from-campaign" in r.stderr
+    r = run(P50, "--contacts", 0, 0, ok=False)
+    assert r.returncode == 1 and "listed twice" in r.stderr
+    r = run(P50, "--contacts", 82, "--out", tmp_path / "o", ok=False)
+    assert r.returncode == 1 and "the packing has 82 contacts" in r.stderr
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "fields.csv").write_text("contact,f_crit\n0,1\n")
+    r = run(P50, "--contacts", 0, "--out", tmp_path / "t", ok=False)
+    assert r.returncode == 1 and "not this script's table" in r.stderr
+    assert (tmp_path / "t" / "fields.csv").read_text() == "contact,f_crit\n0,1\n"
