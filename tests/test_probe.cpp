@@ -322,6 +322,28 @@ TEST(ProbeCampaign, SummaryRatioOfMeans) {
   const CampaignSummary empty = summarize(p, st, FitWindow{1.0, 1.1});
   EXPECT_FALSE(empty.has_fit);
   EXPECT_NE(empty.fit_error.find("need at least 2"), std::string::npos) << empty.fit_error;
+  EXPECT_EQ(sum.not_converged, 0);
+  EXPECT_EQ(sum.without_solution, 0);
+}
+
+// A probe without a solution (the exact methods' kNoSolution) counts as not converged and as
+// without a solution, and stays out of the means; a near-exact one counts as not converged
+// and enters them.
+TEST(ProbeCampaign, SummaryLeavesProbesWithoutASolutionOutOfTheMeans) {
+  const Packing& p = fixture_p50();
+  CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  st.rows = {{0, 0, 1, 2.0, 3.0, true, 10, 1e-9, 0, 0.0},
+             {1, 0, 7, 1.0, 1.5, false, 20, 2e-6, 0, 0.0},
+             {2, 0, 8, 4.0, 0.0, false, 30, kNoSolution, 0, 0.0}};
+  const CampaignSummary sum = summarize(p, st);
+  EXPECT_EQ(sum.probes, 3);
+  EXPECT_EQ(sum.not_converged, 2);
+  EXPECT_EQ(sum.without_solution, 1);
+  EXPECT_DOUBLE_EQ(sum.F_crit_over_F_cont, (3.0 + 1.5) / (2.0 + 1.0));
+  EXPECT_DOUBLE_EQ(sum.F_cont_over_F0, 1.5 / p.force_unit());
+  const nlohmann::json j = campaign_summary_json(p, PackingStats{}, sum);
+  EXPECT_EQ(j.at("not_converged").get<int>(), 2);
+  EXPECT_EQ(j.at("without_solution").get<int>(), 1);
 }
 
 // A cancel predicate that returns true from its `fire`-th call on (0: never), counting its

@@ -306,7 +306,10 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
               o.method.c_str(), format_duration(wall).c_str(), out.c_str());
   std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.contact.mu, stats.phi,
               stats.z, sum.F_cont_over_F0);
-  std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d\n", sum.F_crit_over_F_cont, sum.not_converged);
+  std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d", sum.F_crit_over_F_cont, sum.not_converged);
+  if (sum.without_solution > 0)
+    std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
+  std::printf("\n");
   if (sum.has_fit)
     std::printf("  d(r) ~ r^-alpha: alpha = %.3f +- %.3f  (fit over r in [%.2f, %.2f], %d bins, R2 %.3f)\n",
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);

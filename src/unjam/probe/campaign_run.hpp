@@ -63,7 +63,8 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
                                                      const CheckpointedCampaignOptions& options);
 
 // The measurements of probe_summary.json: the packing (seed, N, mu, phi, z, F0 in simulation
-// units), the probes (count, not converged, <F_cont> / F0, <F_crit> / <F_cont>) and the fit of
+// units), the probes (count, not converged, of them without a solution, <F_cont> / F0,
+// <F_crit> / <F_cont> over the probes with one) and the fit of
 // d(r) ~ r^-alpha (alpha, alpha_err and the fit's window, bins, R2, log_A and bootstrap
 // samples), or fit_error when there is none.
 nlohmann::json campaign_summary_json(const Packing& packing, const PackingStats& stats,

@@ -267,7 +267,10 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state,
   int solved = 0;
   for (const ProbeRow& r : state.rows) {
     if (!r.converged) ++sum.not_converged;
-    if (r.residual == kNoSolution) continue;
+    if (r.residual == kNoSolution) {
+      ++sum.without_solution;
+      continue;
+    }
     ++solved;
     f_cont += r.f_cont;
     f_crit += r.f_crit;

@@ -92,6 +92,7 @@ struct CampaignHooks {
 struct CampaignSummary {
   int probes = 0;
   int not_converged = 0;             // with the probes that found no solution (not in the means)
+  int without_solution = 0;          // of them, those with no solution (residual kNoSolution)
   double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probed contacts
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
   bool has_fit = false;
