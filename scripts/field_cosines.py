@@ -17,9 +17,11 @@ exactly (docs/probe.md). This probes every listed contact by both, through the P
 
 Outputs, in DIR (default PACKING-fields):
   fields.csv   contact, a, b, f_cont, f_crit_lp, f_crit_cd, residual_cd, exact (cd residual
-               at most 1e-6 g: unjam's own verdict), cosine, norm_ratio. Written after every
-               chunk of --chunk contacts; a run stopped by Ctrl-C resumes from it (the same
-               command skips the contacts it already holds).
+               at most 1e-6 g: unjam's own verdict), cosine, norm_ratio, in the order of the
+               list. Written after every chunk of --chunk contacts; a run stopped by Ctrl-C
+               resumes from it (the same command skips the contacts it already holds; a
+               table of other contacts or other settings is refused, not overwritten).
+  settings.json  the packing, --cd-start, --g and --dt the table was made with
   fields.json  the counts, the cosine's median, quartiles and range over the exact probes,
                the packing, the settings, the program's version and the command
   fields.md    the same as a table
@@ -44,7 +46,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODULE_DIR = os.path.join(REPO, "build", "release", "python")
 
 from experiment_stages import write_table  # noqa: E402
-from stage_runner import write_json  # noqa: E402
+from stage_runner import read_json, write_json  # noqa: E402
 import unjam_plot  # noqa: E402
 
 COLUMNS = ["contact", "a", "b", "f_cont", "f_crit_lp", "f_crit_cd", "residual_cd", "exact",
@@ -118,7 +120,9 @@ def cosine(u, v):
     return float(np.clip(np.dot(u.ravel(), v.ravel()) / (nu * nv), -1.0, 1.0))
 
 
-def read_done(path):
+def read_done(a, ks, settings):
+    """The rows of an earlier run into a.out with these settings and of listed contacts only."""
+    path, saved = os.path.join(a.out, "fields.csv"), os.path.join(a.out, "settings.json")
     if not os.path.isfile(path):
         return []
     with open(path, newline="") as f:
@@ -126,7 +130,15 @@ def read_done(path):
         if r.fieldnames != COLUMNS:
             sys.exit(f"field_cosines: {path} is not this script's table (columns {r.fieldnames}); "
                      "move it away or choose another --out")
-        return list(r)
+        rows = list(r)
+    if read_json(saved) != settings:
+        sys.exit(f"field_cosines: {path} was made with other settings ({saved}: {read_json(saved)}); "
+                 "move it away or choose another --out")
+    others = sorted({int(x["contact"]) for x in rows} - set(ks))
+    if others:
+        sys.exit(f"field_cosines: {path} holds contacts that are not listed ({others[:5]}"
+                 f"{' ...' if len(others) > 5 else ''}); move it away or choose another --out")
+    return rows
 
 
 def quantiles(values):
@@ -167,7 +179,10 @@ def main(argv):
     ks = listed_contacts(a)
     os.makedirs(a.out, exist_ok=True)
     table = os.path.join(a.out, "fields.csv")
-    rows = read_done(table)
+    settings = {"packing": os.path.abspath(a.packing), "cd_start": a.cd_start, "g": a.g, "dt": a.dt}
+    rows = read_done(a, ks, settings)
+    write_json(os.path.join(a.out, "settings.json"), settings)
+    order = {k: i for i, k in enumerate(ks)}
     done = {int(r["contact"]) for r in rows}
     todo = [k for k in ks if k not in done]
     if done:
@@ -188,6 +203,7 @@ def main(argv):
                     "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
                     "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
                     if solved and np.linalg.norm(r_lp.u) > 0 else ""})
+            rows.sort(key=lambda r: order[int(r["contact"])])
             write_table(table, rows, COLUMNS)
             print(f"probes {len(rows)} / {len(ks)}", flush=True)
     except KeyboardInterrupt:

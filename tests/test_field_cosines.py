@@ -84,10 +84,17 @@ def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
         w = csv.DictWriter(f, fieldnames=list(table[0]))
         w.writeheader()
         w.writerows(table)
-    r = run(P50, "--contacts", 0, 1, 2, "--out", tmp_path)
+    r = run(P50, "--contacts", 2, 0, 1, "--out", tmp_path)
     assert "resuming: 2 contacts" in r.stdout
     again = rows(tmp_path)
-    assert [x["contact"] for x in again] == ["0", "1", "2"] and again[0]["cosine"] == "0.5"
+    assert [x["contact"] for x in again] == ["2", "0", "1"] and again[1]["cosine"] == "0.5"
+    # Another list or other settings: refused, the table left as it is.
+    before = (tmp_path / "fields.csv").read_text()
+    r = run(P50, "--contacts", 0, 1, "--out", tmp_path, ok=False)
+    assert r.returncode == 1 and "not listed ([2])" in r.stderr
+    r = run(P50, "--contacts", 2, 0, 1, "--cd-start", "static", "--out", tmp_path, ok=False)
+    assert r.returncode == 1 and "other settings" in r.stderr
+    assert (tmp_path / "fields.csv").read_text() == before
 
 
 def test_the_contacts_of_a_campaign(tmp_path):
