@@ -187,7 +187,7 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
     assert abs(static.f_crit - compliant.f_crit) > 0.1 * compliant.f_crit
     with pytest.raises(unjam.Error, match="must be static, lp or compliant"):
         unjam.probe(p, contact=14, method="cd", cd_start="soft")
-    with pytest.raises(unjam.Error, match="cd_start applies to method='cd' only"):
+    with pytest.raises(unjam.Error, match="the cd start 'compliant' applies to the cd method only"):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")
 
 

@@ -57,8 +57,6 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
     throw Error("--displacement must be peculiar or total");
   s.method = method_from_name(o.method);
   s.cd.start = cd_start_from_name(o.cd_start);
-  if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
-    throw Error("--cd-start applies to --method cd only");
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;

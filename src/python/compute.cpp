@@ -130,8 +130,6 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.cd.start = cd_start_from_name(cd_start);
-  if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
-    throw Error("cd_start applies to method='cd' only");
   s.nlgs.g = s.kinematic.g = g;
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;

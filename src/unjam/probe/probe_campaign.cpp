@@ -164,6 +164,9 @@ void validate(const CampaignSettings& s) {
   if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
       !positive(s.nlgs.velocity_tol))
     throw Error("the probe's g, dt and velocity_tol must be positive");
+  if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
+    throw Error(std::string("the cd start '") + cd_start_name(s.cd.start) + "' applies to the cd method only (the method is " +
+                method_name(s.method) + ")");
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {

@@ -93,7 +93,7 @@ struct CampaignSummary {
   int probes = 0;
   int not_converged = 0;             // with the probes that found no solution (not in the means)
   int without_solution = 0;          // of them, those with no solution (residual kNoSolution)
-  double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probed contacts
+  double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probes with a solution
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
   bool has_fit = false;
   PowerLawFit fit;
@@ -105,7 +105,8 @@ struct CampaignSummary {
 // Throws unjam::Error for recorded settings (meta.settings) of the wrong type or range.
 CampaignSettings campaign_settings_for(const Packing& packing);
 
-// Throws unjam::Error unless g, dt and velocity_tol are positive and finite.
+// Throws unjam::Error unless g, dt and velocity_tol are positive and finite, and for a cd start
+// other than the static network with a method other than cd.
 void validate(const CampaignSettings& settings);
 
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
