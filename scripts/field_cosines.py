@@ -239,11 +239,9 @@ def main(argv):
                   f"{summary['cosine_below_0.5']} | {summary['norm_ratio']['median']:.3f} |")
     else:
         md.append(f"| {len(rows)} | {len(exact)} | – | – | – | – | – |")
-    with open(os.path.join(a.out, "fields.md.tmp"), "w") as f:
-        f.write(f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}), exact probes only; "
-                "norm ratio |u_cd| / |u_lp|\n\n")
-        f.write("\n".join(md) + "\n")
-    os.replace(os.path.join(a.out, "fields.md.tmp"), os.path.join(a.out, "fields.md"))
+    unjam_plot.write_file_atomic(os.path.join(a.out, "fields.md"), lambda f: f.write(
+        f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}), exact probes only; "
+        "norm ratio |u_cd| / |u_lp|\n\n" + "\n".join(md) + "\n"))
     plot(rows, os.path.join(a.out, "cosines.png"),
          f"{os.path.basename(a.packing.rstrip('/'))}: {len(exact)} exact probes of {len(rows)}")
     med = f"median {q['median']:.3f}" if q else "no exact probe"

@@ -58,6 +58,15 @@ def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
                                                               if r["exact"] == "1"]))
     assert s["mu"] == 0.1 and s["N"] == 50 and s["cd_start"] == "compliant"
     assert (tmp_path / "cosines.png").stat().st_size > 0 and "| 6 |" in (tmp_path / "fields.md").read_text()
+    # Gathered over packings (here one): the same median, N, mu and seed in the table.
+    plot = [sys.executable, str(REPO / "scripts" / "plot_field_cosines.py")]
+    r = subprocess.run(plot + [str(tmp_path), "--out", str(tmp_path / "all")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    row = [x for x in (tmp_path / "all.md").read_text().splitlines() if x.startswith("| 50 |")]
+    assert len(row) == 1 and f"| 0.1 | 3 | 6 | {s['exact']} | {s['cosine']['median']:.3f} (" in row[0]
+    assert (tmp_path / "all.png").stat().st_size > 0
+    r = subprocess.run(plot + [str(tmp_path / "nowhere"), "--out", str(tmp_path / "x")], capture_output=True, text=True)
+    assert r.returncode == 1 and "fields.json" in r.stderr
 
 
 def test_without_friction_on_an_isostatic_packing_the_fields_are_one(tmp_path):
