@@ -13,6 +13,9 @@ exactly (docs/probe.md). This probes every listed contact by both, through the P
   cosine       u_lp . u_cd / (|u_lp| |u_cd|) over the grains' peculiar displacements u (N, 2)
                (rotations left out): 1 where both move the grains alike, 0 where the fields
                are unrelated, < 0 where they move them against each other
+  cosine_near  the same over the grains within --near mean grain diameters of the probed pair's
+               midpoint (periodic distance): the near field, which a floppy region far from
+               the probe (grains that slide by far more than g) does not dominate
   norm_ratio   |u_cd| / |u_lp|
 
 Outputs, in DIR (default PACKING-fields):
@@ -21,7 +24,10 @@ Outputs, in DIR (default PACKING-fields):
                list. Written after every chunk of --chunk contacts; a run stopped by Ctrl-C
                resumes from it (the same command skips the contacts it already holds; a
                table of other contacts or other settings is refused, not overwritten).
-  settings.json  the packing, --cd-start, --g and --dt the table was made with
+  settings.json  the packing, --cd-start, --g, --dt and --near the table was made with
+  fields/K.npz the two fields of contact K (arrays u_lp, u_cd (N, 2), rot_lp, rot_cd (N,);
+               peculiar displacements and rotations as unjam.ProbeResult gives them), for any
+               other comparison
   fields.json  the counts, the cosine's median, quartiles and range over the exact probes,
                the packing, the settings, the program's version and the command
   fields.md    the same as a table
@@ -50,7 +56,7 @@ from stage_runner import read_json, write_json  # noqa: E402
 import unjam_plot  # noqa: E402
 
 COLUMNS = ["contact", "a", "b", "f_cont", "f_crit_lp", "f_crit_cd", "residual_cd", "exact",
-           "cosine", "norm_ratio"]
+           "cosine", "cosine_near", "norm_ratio"]
 EXACT_TOLERANCE = 1e-6  # g: the cd probe's exact-step tolerance (docs/probe.md)
 
 
@@ -82,6 +88,8 @@ def parse(argv):
     ap.add_argument("--g", type=float, default=1e-9, help="the probe's opening (default 1e-9)")
     ap.add_argument("--dt", type=float, help="the cd step's time step (default: the quasi-static "
                     "sqrt(g / 1e-5), as unjam probe --method cd)")
+    ap.add_argument("--near", type=float, default=5.0,
+                    help="radius of the near field, in mean grain diameters (default 5)")
     ap.add_argument("--threads", type=int, default=0, help="threads (0: all cores)")
     ap.add_argument("--chunk", type=int, default=8, help="contacts probed between saves (default 8)")
     ap.add_argument("--out", help="output directory (default: PACKING-fields)")
@@ -94,6 +102,8 @@ def parse(argv):
         v = getattr(a, name)
         if v is not None and not (0 < v < float("inf")):
             ap.error(f"--{name} must be a finite number > 0, got {v}")
+    if not (0 < a.near < float("inf")):
+        ap.error(f"--near must be a finite number > 0, got {a.near}")
     if a.threads < 0 or a.chunk < 1:
         ap.error("--threads must be >= 0 and --chunk >= 1")
     a.out = a.out or a.packing.rstrip("/") + "-fields"
@@ -118,6 +128,25 @@ def cosine(u, v):
     if nu == 0.0 or nv == 0.0:
         return float("nan")
     return float(np.clip(np.dot(u.ravel(), v.ravel()) / (nu * nv), -1.0, 1.0))
+
+
+def near_grains(p, contact, radius):
+    """The grains within radius (in mean grain diameters) of the contact's midpoint, periodic."""
+    L = np.asarray(p.cell, dtype=float)[:2]
+    x = np.column_stack([p.x, p.y])
+    xa, xb = x[p.contacts.a[contact]], x[p.contacts.b[contact]]
+    d_ab = xb - xa - L * np.round((xb - xa) / L)
+    d = x - (xa + 0.5 * d_ab)
+    d -= L * np.round(d / L)
+    return np.linalg.norm(d, axis=1) <= radius * 2.0 * np.mean(p.radii)
+
+
+def save_fields(path, r_lp, r_cd):
+    """The two fields of one contact, atomically (a temporary file, then os.replace)."""
+    tmp = path + ".tmp"
+    with open(tmp, "wb") as f:
+        np.savez(f, u_lp=r_lp.u, u_cd=r_cd.u, rot_lp=r_lp.rot, rot_cd=r_cd.rot)
+    os.replace(tmp, path)
 
 
 def read_done(a, ks, settings):
@@ -179,7 +208,9 @@ def main(argv):
     ks = listed_contacts(a)
     os.makedirs(a.out, exist_ok=True)
     table = os.path.join(a.out, "fields.csv")
-    settings = {"packing": os.path.abspath(a.packing), "cd_start": a.cd_start, "g": a.g, "dt": a.dt}
+    settings = {"packing": os.path.abspath(a.packing), "cd_start": a.cd_start, "g": a.g, "dt": a.dt,
+                "near": a.near}
+    os.makedirs(os.path.join(a.out, "fields"), exist_ok=True)
     rows = read_done(a, ks, settings)
     write_json(os.path.join(a.out, "settings.json"), settings)
     order = {k: i for i, k in enumerate(ks)}
@@ -195,12 +226,16 @@ def main(argv):
             cd = unjam.probe(p, contacts=chunk, method="cd", cd_start=a.cd_start, dt=a.dt, **common)
             for r_lp, r_cd in zip(lp, cd):
                 solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
+                near = near_grains(p, r_cd.contact, a.near)
+                if solved:
+                    save_fields(os.path.join(a.out, "fields", f"{r_cd.contact}.npz"), r_lp, r_cd)
                 rows.append({
                     "contact": str(r_cd.contact), "a": str(r_cd.a), "b": str(r_cd.b), "f_cont": repr(r_cd.f_cont),
                     "f_crit_lp": repr(r_lp.f_crit), "f_crit_cd": repr(r_cd.f_crit) if solved else "",
                     "residual_cd": repr(r_cd.residual) if solved else "",
                     "exact": "1" if r_cd.residual <= EXACT_TOLERANCE else "0",
                     "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
+                    "cosine_near": repr(cosine(r_lp.u[near], r_cd.u[near])) if solved else "",
                     "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
                     if solved and np.linalg.norm(r_lp.u) > 0 else ""})
             rows.sort(key=lambda r: order[int(r["contact"])])
@@ -217,28 +252,32 @@ def main(argv):
 
     exact = [r for r in rows if r["exact"] == "1"]
     cos = [float(r["cosine"]) for r in exact if r["cosine"] not in ("", "nan")]
+    cos_near = [float(r["cosine_near"]) for r in exact if r["cosine_near"] not in ("", "nan")]
     ratio = [float(r["norm_ratio"]) for r in exact if r["norm_ratio"] != ""]
     summary = {
         "packing": os.path.abspath(a.packing), "N": p.N, "mu": p.mu, "seed": p.seed,
         "cd_start": a.cd_start, "g": a.g, "dt": a.dt,
         "probes": len(rows), "exact": len(exact),
         "without_solution": sum(1 for r in rows if r["f_crit_cd"] == ""),
-        "cosine": quantiles(cos), "norm_ratio": quantiles(ratio),
+        "cosine": quantiles(cos), "cosine_near": quantiles(cos_near), "near_diameters": a.near,
+        "norm_ratio": quantiles(ratio),
         "cosine_above_0.99": sum(1 for c in cos if c > 0.99),
         "cosine_below_0.5": sum(1 for c in cos if c < 0.5),
         "program_version": unjam.__version__,
         "command": " ".join([os.path.basename(sys.executable), *sys.argv]),
     }
     write_json(os.path.join(a.out, "fields.json"), summary)
-    q = summary["cosine"]
-    md = ["| probes | exact | cosine median (quartiles) | range | above 0.99 | below 0.5 | norm ratio, median |",
-          "|---|---|---|---|---|---|---|"]
+    q, qn = summary["cosine"], summary["cosine_near"]
+    md = ["| probes | exact | cosine median (quartiles) | range | above 0.99 | below 0.5 | "
+          f"near field ({a.near:g} diameters) median (quartiles) | norm ratio, median |",
+          "|---|---|---|---|---|---|---|---|"]
     if q:
         md.append(f"| {len(rows)} | {len(exact)} | {q['median']:.3f} ({q['q1']:.3f}–{q['q3']:.3f}) | "
                   f"{q['min']:.3f}–{q['max']:.3f} | {summary['cosine_above_0.99']} | "
-                  f"{summary['cosine_below_0.5']} | {summary['norm_ratio']['median']:.3f} |")
+                  f"{summary['cosine_below_0.5']} | {qn['median']:.3f} ({qn['q1']:.3f}–{qn['q3']:.3f}) | "
+                  f"{summary['norm_ratio']['median']:.3f} |")
     else:
-        md.append(f"| {len(rows)} | {len(exact)} | – | – | – | – | – |")
+        md.append(f"| {len(rows)} | {len(exact)} | – | – | – | – | – | – |")
     unjam_plot.write_file_atomic(os.path.join(a.out, "fields.md"), lambda f: f.write(
         f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}), exact probes only; "
         "norm ratio |u_cd| / |u_lp|\n\n" + "\n".join(md) + "\n"))

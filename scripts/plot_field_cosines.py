@@ -7,7 +7,7 @@ Each DIR is an output directory of scripts/field_cosines.py (fields.json and fie
            (median, quartiles as a bar, range as a thin line), and the median norm ratio
            |u_cd| / |u_lp|; mu = 0 is drawn at the left edge of the logarithmic axis
   OUT.md   one row per packing: N, mu, seed, probes, exact, cosine median (quartiles), range,
-           norm ratio median
+           the near field's cosine median (quartiles), norm ratio median
 Exit codes: 0 done, 1 bad input (a directory without field_cosines' outputs).
 """
 
@@ -43,15 +43,18 @@ def read_dir(d):
         raise unjam_plot.UserError(f"cannot read {path}: {e}")
     cos = np.array([float(r["cosine"]) for r in rows if r["cosine"] not in ("", "nan")])
     ratio = np.array([float(r["norm_ratio"]) for r in rows if r["norm_ratio"] != ""])
+    near = np.array([float(r["cosine_near"]) for r in rows if r.get("cosine_near", "") not in ("", "nan")])
     return {"dir": d, "N": s["N"], "mu": float(s["mu"]), "seed": s["seed"], "probes": s["probes"],
-            "exact": s["exact"], "cos": cos, "ratio": ratio}
+            "exact": s["exact"], "cos": cos, "ratio": ratio, "near": near,
+            "near_diameters": s.get("near_diameters")}
 
 
 def main(argv):
     a = parse(argv)
     packs = sorted((read_dir(d) for d in a.dirs), key=lambda p: (p["N"], p["mu"], p["seed"]))
-    lines = ["| N | mu | seed | probes | exact | cosine median (quartiles) | range | norm ratio, median |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| N | mu | seed | probes | exact | cosine median (quartiles) | range | "
+             "near field: cosine median (quartiles) | norm ratio, median |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for p in packs:
         if len(p["cos"]):
             q = np.quantile(p["cos"], [0.0, 0.25, 0.5, 0.75, 1.0])
@@ -59,7 +62,12 @@ def main(argv):
         else:
             cos = "– | –"
         ratio = f"{np.median(p['ratio']):.3f}" if len(p["ratio"]) else "–"
-        lines.append(f"| {p['N']} | {p['mu']:g} | {p['seed']} | {p['probes']} | {p['exact']} | {cos} | {ratio} |")
+        if len(p["near"]):
+            qn = np.quantile(p["near"], [0.25, 0.5, 0.75])
+            near = f"{qn[1]:.3f} ({qn[0]:.3f}–{qn[2]:.3f}), {p['near_diameters']:g} diameters"
+        else:
+            near = "–"
+        lines.append(f"| {p['N']} | {p['mu']:g} | {p['seed']} | {p['probes']} | {p['exact']} | {cos} | {near} | {ratio} |")
     unjam_plot.write_file_atomic(a.out + ".md", lambda f: f.write(
         "The lp and cd probes' fields (scripts/field_cosines.py), exact probes only; "
         "norm ratio |u_cd| / |u_lp|\n\n" + "\n".join(lines) + "\n"))
@@ -76,6 +84,8 @@ def main(argv):
         ax0.plot([x, x], [q[0], q[4]], color="0.6", lw=0.8)
         ax0.plot([x, x], [q[1], q[3]], color="C0", lw=4, solid_capstyle="butt")
         ax0.plot([x], [q[2]], "o", color="k", ms=3)
+        if len(p["near"]):
+            ax0.plot([x * 1.04], [np.median(p["near"])], "s", color="C3", ms=3)
         if len(p["ratio"]):
             ax1.plot([x], [np.median(p["ratio"])], "o", color="C1", ms=4)
     for ax, label in ((ax0, "cosine of the fields, lp against cd"), (ax1, "median |u_cd| / |u_lp|")):
@@ -86,7 +96,8 @@ def main(argv):
     lowest = min((p["cos"].min() for p in packs if len(p["cos"])), default=0.0)
     ax0.set_ylim(min(0.0, lowest) - 0.05, 1.02)
     ax1.axhline(1.0, color="0.5", lw=0.8)
-    fig.suptitle("lp field against the paper's probe (cd), exact probes: median, quartiles, range", fontsize=10)
+    fig.suptitle("lp field against the paper's probe (cd), exact probes: median (black), quartiles, range; "
+                 "near field's median (red)", fontsize=9)
     fig.tight_layout()
     unjam_plot.save_figure(fig, a.out + ".png")
     plt.close(fig)

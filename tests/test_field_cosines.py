@@ -37,7 +37,7 @@ def rows(out):
 
 def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
     ks = [0, 1, 2, 3, 5, 8]
-    run(P50, "--contacts", *ks, "--threads", 1, "--chunk", 4, "--out", tmp_path)
+    run(P50, "--contacts", *ks, "--threads", 1, "--chunk", 4, "--near", 1.5, "--out", tmp_path)
     p = unjam.read_packing(P50)
     lp = unjam.probe(p, contacts=ks, method="lp")
     cd = unjam.probe(p, contacts=ks, method="cd", cd_start="compliant")
@@ -49,6 +49,22 @@ def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
         u, v = a.u.ravel(), b.u.ravel()
         assert float(r["cosine"]) == pytest.approx(u @ v / np.sqrt((u @ u) * (v @ v)), abs=1e-14)
         assert float(r["norm_ratio"]) == pytest.approx(np.linalg.norm(v) / np.linalg.norm(u), rel=1e-14)
+        # The near field: grains within 1.5 mean diameters of the pair's midpoint (periodic).
+        L = np.asarray(p.cell)[:2]
+        xy = np.column_stack([p.x, p.y])
+        k = int(r["contact"])
+        xa, xb = xy[p.contacts.a[k]], xy[p.contacts.b[k]]
+        mid = xa + 0.5 * (xb - xa - L * np.round((xb - xa) / L))
+        d = xy - mid
+        d -= L * np.round(d / L)
+        near = np.linalg.norm(d, axis=1) <= 1.5 * 2 * np.mean(p.radii)
+        assert 2 <= near.sum() < p.N
+        un, vn = a.u[near].ravel(), b.u[near].ravel()
+        assert float(r["cosine_near"]) == pytest.approx(un @ vn / np.sqrt((un @ un) * (vn @ vn)), abs=1e-14)
+        # Both fields kept per contact, as the module gives them.
+        z = np.load(tmp_path / "fields" / f"{k}.npz")
+        assert np.array_equal(z["u_lp"], a.u) and np.array_equal(z["u_cd"], b.u)
+        assert np.array_equal(z["rot_lp"], a.rot) and np.array_equal(z["rot_cd"], b.rot)
     # At mu = 0.1 on 50 disks the fields are close but not equal (docs/probe.md: 0.96-0.9995).
     cos = [float(r["cosine"]) for r in table]
     assert min(cos) > 0.9 and min(cos) < 0.999
