@@ -57,7 +57,6 @@ import unjam_plot  # noqa: E402
 
 COLUMNS = ["contact", "a", "b", "f_cont", "f_crit_lp", "f_crit_cd", "residual_cd", "exact",
            "cosine", "cosine_near", "norm_ratio"]
-EXACT_TOLERANCE = 1e-6  # g: the cd probe's exact-step tolerance (docs/probe.md)
 
 
 def import_unjam():
@@ -142,11 +141,9 @@ def near_grains(p, contact, radius):
 
 
 def save_fields(path, r_lp, r_cd):
-    """The two fields of one contact, atomically (a temporary file, then os.replace)."""
-    tmp = path + ".tmp"
-    with open(tmp, "wb") as f:
-        np.savez(f, u_lp=r_lp.u, u_cd=r_cd.u, rot_lp=r_lp.rot, rot_cd=r_cd.rot)
-    os.replace(tmp, path)
+    """The two fields of one contact, atomically."""
+    unjam_plot.write_file_atomic(
+        path, lambda f: np.savez(f, u_lp=r_lp.u, u_cd=r_cd.u, rot_lp=r_lp.rot, rot_cd=r_cd.rot), binary=True)
 
 
 def read_done(a, ks, settings):
@@ -160,8 +157,9 @@ def read_done(a, ks, settings):
             sys.exit(f"field_cosines: {path} is not this script's table (columns {r.fieldnames}); "
                      "move it away or choose another --out")
         rows = list(r)
-    if read_json(saved) != settings:
-        sys.exit(f"field_cosines: {path} was made with other settings ({saved}: {read_json(saved)}); "
+    recorded = read_json(saved)
+    if recorded != settings:
+        sys.exit(f"field_cosines: {path} was made with other settings ({saved}: {recorded}); "
                  "move it away or choose another --out")
     others = sorted({int(x["contact"]) for x in rows} - set(ks))
     if others:
@@ -233,7 +231,7 @@ def main(argv):
                     "contact": str(r_cd.contact), "a": str(r_cd.a), "b": str(r_cd.b), "f_cont": repr(r_cd.f_cont),
                     "f_crit_lp": repr(r_lp.f_crit), "f_crit_cd": repr(r_cd.f_crit) if solved else "",
                     "residual_cd": repr(r_cd.residual) if solved else "",
-                    "exact": "1" if r_cd.residual <= EXACT_TOLERANCE else "0",
+                    "exact": "1" if r_cd.converged else "0",  # residual <= 1e-6 g (docs/probe.md)
                     "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
                     "cosine_near": repr(cosine(r_lp.u[near], r_cd.u[near])) if solved else "",
                     "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))

@@ -2,7 +2,7 @@
 
 Usage:  /usr/bin/python3 scripts/plot_field_cosines.py DIR [DIR ...] --out OUT
 
-Each DIR is an output directory of scripts/field_cosines.py (fields.json and fields.csv). Writes:
+Each DIR is an output directory of scripts/field_cosines.py (its fields.json). Writes:
   OUT.png  per packing, against mu: the cosine of the lp and cd fields over the exact probes
            (median, quartiles as a bar, range as a thin line), and the median norm ratio
            |u_cd| / |u_lp|; mu = 0 is drawn at the left edge of the logarithmic axis
@@ -12,11 +12,8 @@ Exit codes: 0 done, 1 bad input (a directory without field_cosines' outputs).
 """
 
 import argparse
-import csv
 import os
 import sys
-
-import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -31,21 +28,14 @@ def parse(argv):
 
 
 def read_dir(d):
+    """fields.json of one field_cosines.py output: the packing and its quantiles over the exact
+    probes (min, q1, median, q3, max; null where no probe is exact)."""
     s = unjam_plot.read_json(os.path.join(d, "fields.json"))
-    for key in ("N", "mu", "seed", "probes", "exact"):
+    for key in ("N", "mu", "seed", "probes", "exact", "cosine", "cosine_near", "norm_ratio"):
         if key not in s:
             raise unjam_plot.UserError(f"{d}/fields.json has no '{key}': not an output of field_cosines.py")
-    path = os.path.join(d, "fields.csv")
-    try:
-        with open(path, newline="") as f:
-            rows = [r for r in csv.DictReader(f) if r.get("exact") == "1"]
-    except OSError as e:
-        raise unjam_plot.UserError(f"cannot read {path}: {e}")
-    cos = np.array([float(r["cosine"]) for r in rows if r["cosine"] not in ("", "nan")])
-    ratio = np.array([float(r["norm_ratio"]) for r in rows if r["norm_ratio"] != ""])
-    near = np.array([float(r["cosine_near"]) for r in rows if r.get("cosine_near", "") not in ("", "nan")])
-    return {"dir": d, "N": s["N"], "mu": float(s["mu"]), "seed": s["seed"], "probes": s["probes"],
-            "exact": s["exact"], "cos": cos, "ratio": ratio, "near": near,
+    return {"N": s["N"], "mu": float(s["mu"]), "seed": s["seed"], "probes": s["probes"], "exact": s["exact"],
+            "cos": s["cosine"], "near": s["cosine_near"], "ratio": s["norm_ratio"],
             "near_diameters": s.get("near_diameters")}
 
 
@@ -56,17 +46,11 @@ def main(argv):
              "near field: cosine median (quartiles) | norm ratio, median |",
              "|---|---|---|---|---|---|---|---|---|"]
     for p in packs:
-        if len(p["cos"]):
-            q = np.quantile(p["cos"], [0.0, 0.25, 0.5, 0.75, 1.0])
-            cos = f"{q[2]:.3f} ({q[1]:.3f}–{q[3]:.3f}) | {q[0]:.3f}–{q[4]:.3f}"
-        else:
-            cos = "– | –"
-        ratio = f"{np.median(p['ratio']):.3f}" if len(p["ratio"]) else "–"
-        if len(p["near"]):
-            qn = np.quantile(p["near"], [0.25, 0.5, 0.75])
-            near = f"{qn[1]:.3f} ({qn[0]:.3f}–{qn[2]:.3f}), {p['near_diameters']:g} diameters"
-        else:
-            near = "–"
+        q, qn, r = p["cos"], p["near"], p["ratio"]
+        cos = f"{q['median']:.3f} ({q['q1']:.3f}–{q['q3']:.3f}) | {q['min']:.3f}–{q['max']:.3f}" if q else "– | –"
+        near = (f"{qn['median']:.3f} ({qn['q1']:.3f}–{qn['q3']:.3f}), {p['near_diameters']:g} diameters"
+                if qn else "–")
+        ratio = f"{r['median']:.3f}" if r else "–"
         lines.append(f"| {p['N']} | {p['mu']:g} | {p['seed']} | {p['probes']} | {p['exact']} | {cos} | {near} | {ratio} |")
     unjam_plot.write_file_atomic(a.out + ".md", lambda f: f.write(
         "The lp and cd probes' fields (scripts/field_cosines.py), exact probes only; "
@@ -77,23 +61,23 @@ def main(argv):
     mu0 = min(positive) / 3 if positive else 1e-3  # where mu = 0 is drawn
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(9.0, 3.6))
     for i, p in enumerate(packs):
-        if not len(p["cos"]):
+        q = p["cos"]
+        if not q:
             continue
         x = (p["mu"] if p["mu"] > 0 else mu0) * (1.0 + 0.06 * (i % 3 - 1))  # seeds side by side
-        q = np.quantile(p["cos"], [0.0, 0.25, 0.5, 0.75, 1.0])
-        ax0.plot([x, x], [q[0], q[4]], color="0.6", lw=0.8)
-        ax0.plot([x, x], [q[1], q[3]], color="C0", lw=4, solid_capstyle="butt")
-        ax0.plot([x], [q[2]], "o", color="k", ms=3)
-        if len(p["near"]):
-            ax0.plot([x * 1.04], [np.median(p["near"])], "s", color="C3", ms=3)
-        if len(p["ratio"]):
-            ax1.plot([x], [np.median(p["ratio"])], "o", color="C1", ms=4)
+        ax0.plot([x, x], [q["min"], q["max"]], color="0.6", lw=0.8)
+        ax0.plot([x, x], [q["q1"], q["q3"]], color="C0", lw=4, solid_capstyle="butt")
+        ax0.plot([x], [q["median"]], "o", color="k", ms=3)
+        if p["near"]:
+            ax0.plot([x * 1.04], [p["near"]["median"]], "s", color="C3", ms=3)
+        if p["ratio"]:
+            ax1.plot([x], [p["ratio"]["median"]], "o", color="C1", ms=4)
     for ax, label in ((ax0, "cosine of the fields, lp against cd"), (ax1, "median |u_cd| / |u_lp|")):
         ax.set_xscale("log")
         ax.set_xlabel(f"mu (mu = 0 drawn at {mu0:.2g})")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    lowest = min((p["cos"].min() for p in packs if len(p["cos"])), default=0.0)
+    lowest = min((p["cos"]["min"] for p in packs if p["cos"]), default=0.0)
     ax0.set_ylim(min(0.0, lowest) - 0.05, 1.02)
     ax1.axhline(1.0, color="0.5", lw=0.8)
     fig.suptitle("lp field against the paper's probe (cd), exact probes: median (black), quartiles, range; "
