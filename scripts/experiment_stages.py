@@ -38,9 +38,11 @@ SCALES = {
               "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "compliant"},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
-# cd probes whose step was not solved exactly (without a solution: left out of the means;
-# with a residual of 1e-6 to 1e-3 g: kept); alpha empty where the fit failed.
-EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "F_crit_over_F_cont_lp",
+# cd probes whose step was not solved exactly (residual above 1e-6 g); without_solution: those
+# of them without a solution (residual above 1e-3 g), left out of the cd means (the near-exact
+# ones are kept); alpha empty where the fit failed.
+EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "without_solution",
+                 "F_crit_over_F_cont_lp",
                  "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd"]
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
@@ -155,6 +157,7 @@ def exact_row(d, mu, n, seed):
     busy = sum(r.get("busy_seconds", 0.0) for r in s["cd"].get("ranks", []))
     return {"mu": fmt_mu(mu), "N": n, "seed": seed, "probes": s["cd"]["probes"],
             "not_exact": s["cd"]["not_converged"],
+            "without_solution": s["cd"]["without_solution"],
             "F_crit_over_F_cont_lp": repr(float(s["lp"]["F_crit_over_F_cont"])),
             "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
             "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),

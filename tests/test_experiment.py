@@ -243,6 +243,7 @@ class ExperimentTiny(unittest.TestCase):
                     self.assertEqual(s["settings"]["cd_start"], "compliant")
                 self.assertEqual(float(r[f"F_crit_over_F_cont_{m}"]), s["F_crit_over_F_cont"])
             self.assertEqual(int(r["not_exact"]), 0, r)
+            self.assertEqual(int(r["without_solution"]), 0, r)
         # mu = 0, isostatic: lp gives F_crit = F_cont; the exact step at its quasi-static dt
         # too, up to its inertial term (~1e-3 at g / dt^2 = 1e-5), which is positive
         self.assertAlmostEqual(float(rows["0"]["F_crit_over_F_cont_lp"]), 1.0, places=6)
@@ -252,7 +253,42 @@ class ExperimentTiny(unittest.TestCase):
             report = f.read()
         self.assertIn("## The exact probe beside lp", report)
         self.assertIn("--cd-start compliant", report)
-        self.assertIn("| 1 | 100 | 1 | 3 | 0 | ", report)
+        self.assertIn("| 1 | 100 | 1 | 3 | 0 | 0 | ", report)
+
+
+class ExactProbeTable(unittest.TestCase):
+    """exact-probe.csv and its report section, from synthetic probe summaries: the cd probes
+    without a solution are counted apart from the near-exact ones, per packing and summed over
+    the seeds."""
+
+    def test_probes_without_a_solution_are_counted_apart(self):
+        sys.path.insert(0, os.path.join(REPO, "scripts"))
+        import experiment_report
+        import experiment_stages
+        with tempfile.TemporaryDirectory() as tmp:
+            rows = []
+            for seed, (bad, none) in ((1, (5, 2)), (2, (3, 1))):
+                d = os.path.join(tmp, f"N500-mu0.5-s{seed}")
+                for m, o in experiment_stages.exact_probe_dirs(d).items():
+                    os.makedirs(o)
+                    s = {"method": m, "probes": 300, "not_converged": bad if m == "cd" else 0,
+                         "without_solution": none if m == "cd" else 0,
+                         "F_crit_over_F_cont": 1.5 if m == "cd" else 2.0, "alpha": 0.5,
+                         "ranks": [{"busy_seconds": 3000.0}]}
+                    with open(os.path.join(o, "probe_summary.json"), "w") as f:
+                        json.dump(s, f)
+                rows.append(experiment_stages.exact_row(d, 0.5, 500, seed))
+            self.assertEqual([(r["not_exact"], r["without_solution"]) for r in rows],
+                             [(5, 2), (3, 1)])
+            table = os.path.join(tmp, "exact-probe.csv")
+            with open(table, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
+                w.writeheader()
+                w.writerows(rows)
+            report = "\n".join(experiment_report.exact_probe_section(table, "compliant"))
+            self.assertIn("| without a solution |", report)
+            self.assertIn("| 0.5 | 500 | 2 | 600 | 8 | 3 | 2.0000 ± 0.0000 | 1.5000 ± 0.0000 |",
+                          report)
 
 
 @requires_unjam
