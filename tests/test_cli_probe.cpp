@@ -99,6 +99,8 @@ TEST_F(CliProbe, SampleProbesSeededForceCarryingContactsAndSummarisesThem) {
   EXPECT_EQ(s["probes"].get<int>(), 10);
   EXPECT_EQ(s["not_converged"].get<int>(), 0);
   EXPECT_EQ(s["method"], "lp");
+  EXPECT_FALSE(s.contains("f_inertia_over_F0"));  // lp has no dynamics: no inertia of a step
+  for (std::size_t i = 0; i < probes.rows(); ++i) EXPECT_EQ(probes.field(i, probes.column("f_inertia")), "");
   EXPECT_DOUBLE_EQ(s["F0"].get<double>(), F0);
   // <F_crit>/<F_cont>: a ratio of the means over the probed contacts.
   EXPECT_NEAR(s["F_crit_over_F_cont"].get<double>(), sum_crit / sum_cont, 1e-12);
@@ -140,8 +142,18 @@ TEST_F(CliProbe, TheExactProbeDefaultsToTheQuasiStaticTimeStep) {
   // g = 1e-7 at dt = 0.1 is the step of g = 1e-9 at dt = 1e-2 (the same g / dt^2).
   const CsvTable a = CsvTable::read(none / "probes.csv"), b = CsvTable::read(big / "probes.csv");
   ASSERT_EQ(a.rows(), b.rows());
-  for (std::size_t i = 0; i < a.rows(); ++i)
+  const CsvTable c = CsvTable::read(paper / "probes.csv");
+  for (std::size_t i = 0; i < a.rows(); ++i) {
     EXPECT_NEAR(a.number(i, a.column("f_crit")) / b.number(i, b.column("f_crit")), 1.0, 1e-9) << "row " << i;
+    // the inertia of the step, m |u| / dt^2, depends on g / dt^2 only too; at dt = 1e-3 it
+    // is larger (the same field, near the quasi-static limit, over a 100 times smaller dt^2)
+    const double fi = a.number(i, a.column("f_inertia"));
+    EXPECT_NEAR(fi / b.number(i, b.column("f_inertia")), 1.0, 1e-6) << "row " << i;
+    EXPECT_GT(c.number(i, c.column("f_inertia")) / fi, 30.0) << "row " << i;
+  }
+  const nlohmann::json inertia = read_json_file(none / "probe_summary.json")["f_inertia_over_F0"];
+  EXPECT_EQ(inertia["probes"].get<int>(), 3);
+  EXPECT_LE(inertia["median"].get<double>(), inertia["max"].get<double>());
   const fs::path nlgs = root_ / "nlgs-dt";
   fs::create_directories(nlgs);
   const testing::ToolRun r =

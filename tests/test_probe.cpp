@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <unistd.h>
 #include <utility>
@@ -112,6 +113,43 @@ TEST(Probe, ExactStepReachesTheQuasiStaticLimitAtLargeDt) {
   const ProbeResult nlgs = probe_nlgs(p, k, fine);
   ASSERT_TRUE(nlgs.converged);
   EXPECT_NEAR(a.result.f_crit / nlgs.f_crit, 1.0, 1e-4);
+}
+
+// max_i m_i |u_i| / dt^2, from the result's own field (m = pi R^2).
+double largest_net_force(const Packing& p, const ProbeResult& r, double dt) {
+  double f = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double R = p.particles.radius[i];
+    f = std::max(f, M_PI * R * R * std::hypot(r.u[i].x(), r.u[i].y()) / (dt * dt));
+  }
+  return f;
+}
+
+TEST(Probe, InertiaOfTheStepIsTheLargestNetForceOnAGrainAndFallsAsDtSquared) {
+  // mu = 0, isostatic: the field is the one mechanism that opens the pair by g, the same at
+  // every dt, so the largest net force on a grain, m |u| / dt^2, falls exactly as dt^-2:
+  // ~1e-3 F0 at dt = 1e-3, ~1e-7 F0 at the quasi-static dt = 0.1. Every method with a
+  // time step records it (cd path, Lemke, NLGS); lp has none (NaN).
+  const Packing& p = isostatic_packing();
+  int k = 0;
+  while (p.contacts[k].fn < 0.5 * p.force_unit()) ++k;
+  ProbeSettings fine, quasi_static;
+  quasi_static.dt = 0.1;
+  const ProbeResult a = probe_cd_path(p, k, fine).result, c = probe_cd_path(p, k, quasi_static).result;
+  const ProbeResult lemke = probe_cd_lemke(p, k, fine).result, nlgs = probe_nlgs(p, k, fine);
+  ASSERT_TRUE(a.converged && c.converged && lemke.converged && nlgs.converged);
+  EXPECT_NEAR(a.f_inertia / largest_net_force(p, a, fine.dt), 1.0, 1e-12);
+  EXPECT_NEAR(c.f_inertia / largest_net_force(p, c, quasi_static.dt), 1.0, 1e-12);
+  EXPECT_NEAR(lemke.f_inertia / largest_net_force(p, lemke, fine.dt), 1.0, 1e-12);
+  EXPECT_NEAR(nlgs.f_inertia / largest_net_force(p, nlgs, fine.dt), 1.0, 1e-12);
+  const double F0 = p.force_unit();
+  EXPECT_GT(a.f_inertia / F0, 1e-5);
+  EXPECT_LT(a.f_inertia / F0, 1e-1);
+  EXPECT_NEAR(c.f_inertia / a.f_inertia, 1e-4, 1e-7);  // (1e-3 / 0.1)^2, the field unchanged
+  EXPECT_NEAR(nlgs.f_inertia / a.f_inertia, 1.0, 1e-3);
+  CampaignSettings lp;
+  lp.kinematic.model = p.meta.contact;
+  EXPECT_TRUE(std::isnan(probe_contact(p, lp, k).f_inertia));
 }
 
 TEST(Probe, ExactStepFromTheStaticNetworkEqualsLemkeWithoutFriction) {
@@ -344,6 +382,45 @@ TEST(ProbeCampaign, SummaryLeavesProbesWithoutASolutionOutOfTheMeans) {
   const nlohmann::json j = campaign_summary_json(p, PackingStats{}, sum);
   EXPECT_EQ(j.at("not_converged").get<int>(), 2);
   EXPECT_EQ(j.at("without_solution").get<int>(), 1);
+  EXPECT_EQ(sum.inertia_probes, 0);  // rows without f_inertia (NaN): no inertia in the summary
+  EXPECT_FALSE(j.contains("f_inertia_over_F0"));
+}
+
+// The inertia of the step in the summary: median and largest of f_inertia / F0 over the rows
+// that have it, and the contact of the largest; in the checkpoint a NaN row value is null,
+// and a row of 10 values (a checkpoint written before f_inertia) resumes with NaN.
+TEST(ProbeCampaign, InertiaOfTheStepIsSummarisedAndSurvivesTheCheckpoint) {
+  const Packing& p = fixture_p50();
+  const double F0 = p.force_unit(), nan = std::numeric_limits<double>::quiet_NaN();
+  CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  for (int k = 0; k < 5; ++k)
+    st.rows.push_back({k, p.contacts[k].a, p.contacts[k].b, 1.0, 1.0, true, 1, 0.0, 0, 0.0,
+                       k == 2 ? nan : std::vector<double>{4e-3, 1e-3, 0.0, 2e-3, 9e-3}[k] * F0});
+  const CampaignSummary sum = summarize(p, st);
+  EXPECT_EQ(sum.inertia_probes, 4);
+  EXPECT_NEAR(sum.f_inertia_median_over_F0, 3e-3, 1e-15);  // of 1e-3, 2e-3, 4e-3, 9e-3
+  EXPECT_NEAR(sum.f_inertia_max_over_F0, 9e-3, 1e-15);
+  EXPECT_EQ(sum.f_inertia_max_contact, 4);
+  const nlohmann::json j = campaign_summary_json(p, PackingStats{}, sum);
+  EXPECT_EQ(j.at("f_inertia_over_F0").at("probes").get<int>(), 4);
+  EXPECT_EQ(j.at("f_inertia_over_F0").at("max_contact").get<int>(), 4);
+
+  nlohmann::json saved = to_json(st);
+  EXPECT_TRUE(saved["rows"][2][10].is_null());
+  const CampaignState back = campaign_state_from_json(saved, p);
+  ASSERT_EQ(back.rows.size(), 5u);
+  EXPECT_TRUE(std::isnan(back.rows[2].f_inertia));
+  for (int k : {0, 1, 3, 4}) EXPECT_EQ(back.rows[k].f_inertia, st.rows[k].f_inertia);
+  nlohmann::json older = saved;
+  for (auto& r : older["rows"]) r.erase(10);
+  const CampaignState old_state = campaign_state_from_json(older, p);
+  for (const ProbeRow& r : old_state.rows) EXPECT_TRUE(std::isnan(r.f_inertia));
+  nlohmann::json bad = saved;
+  bad["rows"][0][10] = "large";
+  EXPECT_THROW(campaign_state_from_json(bad, p), Error);
+  bad = saved;
+  bad["rows"][0].push_back(1.0);
+  EXPECT_THROW(campaign_state_from_json(bad, p), Error);
 }
 
 // A cancel predicate that returns true from its `fire`-th call on (0: never), counting its

@@ -168,6 +168,19 @@ def test_the_exact_probe_defaults_to_the_quasi_static_time_step(p50):
     assert default.f_crit != unjam.probe(p50, contact=0, method="cd", dt=1e-3).f_crit
     assert (unjam.probe(p50, contact=0, method="cd", g=1e-7).f_crit
             == pytest.approx(unjam.probe(p50, contact=0, method="cd", g=1e-7, dt=0.1).f_crit))
+    # The inertia of the step: the largest net force on a grain, m |u| / dt^2 (m = pi R^2),
+    # from the result's own field; the tool's probes.csv holds the same number. lp: NaN.
+    m = np.pi * p50.radii ** 2
+    assert default.f_inertia == pytest.approx(np.max(m * np.hypot(default.u[:, 0], default.u[:, 1])) / 1e-4,
+                                              rel=1e-12)
+    assert np.isnan(unjam.probe(p50, contact=0).f_inertia)
+
+
+def test_probes_csv_records_the_inertia_the_module_returns(tmp_path, p50):
+    tool("probe", FIXTURE, "--sample", 3, "--method", "cd", "--threads", 1, "--out", tmp_path, "--quiet")
+    rows = read_csv(tmp_path / "probes.csv")
+    results = unjam.probe(p50, contacts=[int(x["contact"]) for x in rows], method="cd")
+    assert [float(x["f_inertia"]) for x in rows] == [q.f_inertia for q in results]
 
 
 def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):

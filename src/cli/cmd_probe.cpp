@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -81,11 +82,13 @@ void write_single(const fs::path& out, const Packing& p, const ProbeResult& r) {
 
 std::string rows_csv(const CampaignState& state, const std::string& method) {
   CsvWriter w({"contact", "a", "b", "f_cont", "f_crit", "method", "converged", "sweeps",
-               "residual", "violations", "lambda_dt"});
+               "residual", "violations", "lambda_dt", "f_inertia"});
   for (const ProbeRow& r : state.rows) {
     w.cell(r.contact).cell(r.a).cell(r.b).cell(r.f_cont).cell(r.f_crit).cell(method);
     w.cell(r.converged ? 1 : 0).cell(static_cast<std::int64_t>(r.sweeps)).cell(r.residual);
     w.cell(r.violations).cell(r.lambda_dt);
+    if (std::isnan(r.f_inertia)) w.cell(std::string_view());  // lp, no solution, older checkpoint
+    else w.cell(r.f_inertia);
     w.end_row();
   }
   return w.str();
@@ -177,6 +180,8 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
               r.f_crit / F0, r.f_crit / r.f_cont);
   std::printf("  converged %s  sweeps/pivots %lld  residual %.2e  violations %d  lambda dt / g %.3e\n",
               r.converged ? "yes" : "NO", r.sweeps, r.residual, r.violations, r.lambda_dt / r.g);
+  if (!std::isnan(r.f_inertia))
+    std::printf("  inertia of the step (largest net force on a grain) / F0 %.3e\n", r.f_inertia / F0);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
   print_cd_paths(stats);
@@ -308,6 +313,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");
+  if (sum.inertia_probes > 0)
+    std::printf("  inertia of the step (largest net force on a grain) / F0: median %.2e, largest %.2e (contact %d)\n",
+                sum.f_inertia_median_over_F0, sum.f_inertia_max_over_F0, sum.f_inertia_max_contact);
   if (sum.has_fit)
     std::printf("  d(r) ~ r^-alpha: alpha = %.3f +- %.3f  (fit over r in [%.2f, %.2f], %d bins, R2 %.3f)\n",
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);

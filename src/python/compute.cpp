@@ -242,6 +242,9 @@ void bind_probe_result(py::module_& m) {
       .def_readonly("sweeps", &ProbeResult::sweeps)
       .def_readonly("residual", &ProbeResult::residual)
       .def_readonly("violations", &ProbeResult::violations)
+      .def_readonly("f_inertia", &ProbeResult::f_inertia,
+                    "largest net force on a grain over the step, max m |u| / dt^2 (force units as f_crit; "
+                    "NaN for lp): the load its inertia carries (docs/probe.md, \"The inertia of the step\")")
       .def_property_readonly("u", &u_view, "(N, 2) float64 read-only view: peculiar displacement (R_max)")
       .def_property_readonly("rot", [](py::object self) {
         const ProbeResult& r = self.cast<const ProbeResult&>();

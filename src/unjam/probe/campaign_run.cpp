@@ -77,6 +77,11 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
       {"F_cont_over_F0", sum.F_cont_over_F0},
       {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
   };
+  if (sum.inertia_probes > 0)
+    j["f_inertia_over_F0"] = {{"probes", sum.inertia_probes},
+                              {"median", sum.f_inertia_median_over_F0},
+                              {"max", sum.f_inertia_max_over_F0},
+                              {"max_contact", sum.f_inertia_max_contact}};
   if (sum.has_fit) {
     j["alpha"] = sum.fit.alpha;
     j["alpha_err"] = sum.fit.alpha_err;

@@ -161,6 +161,7 @@ ProbeResult cd_step_result(const CdStepProblem& pb, const Packing& packing,
     r.u_rot[grain] = qd[3 * i + 2] / packing.particles.radius[grain];
   }
   r.lambda_dt = qd[pb.system.pressure_row()];
+  r.f_inertia = step_inertia_force(packing, r, pb.dt);
   return r;
 }
 

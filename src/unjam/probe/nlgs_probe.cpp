@@ -69,6 +69,7 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
     r.u[i] = dt * particles.velocity(i);
     r.u_rot[i] = dt * particles.omega[i];
   }
+  r.f_inertia = step_inertia_force(packing, r, dt);
   return r;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -22,9 +23,17 @@
 namespace unjam {
 namespace {
 
+// A double that may be NaN in JSON, which has no NaN: null stands for it.
+nlohmann::json nullable(double v) { return std::isnan(v) ? nlohmann::json(nullptr) : nlohmann::json(v); }
+double nullable_from(const nlohmann::json& j, const char* what) {
+  if (j.is_null()) return std::numeric_limits<double>::quiet_NaN();
+  if (!j.is_number()) throw Error(std::string(what) + " is not a number or null");
+  return j.get<double>();
+}
+
 ProbeRow row_of(const ProbeResult& r) {
   return {r.contact, r.a,        r.b,        r.f_cont,    r.f_crit,
-          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt};
+          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt, r.f_inertia};
 }
 
 // One worker's probe engine: the LP-based probe keeps its model between probes.
@@ -64,7 +73,7 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
 std::string encode(const ProbeResult& r) {
   ByteWriter w;
   w.put(r.contact).put(r.a).put(r.b).put(r.f_cont).put(r.f_crit).put(r.g).put(r.lambda_dt);
-  w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations);
+  w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations).put(r.f_inertia);
   std::vector<double> u(2 * r.u.size());
   for (std::size_t i = 0; i < r.u.size(); ++i) u[2 * i] = r.u[i].x(), u[2 * i + 1] = r.u[i].y();
   w.put_array(u.data(), u.size());
@@ -86,6 +95,7 @@ ProbeResult decode(const std::string& bytes) {
   r.sweeps = in.get<long long>();
   r.residual = in.get<double>();
   r.violations = in.get<int>();
+  r.f_inertia = in.get<double>();
   const std::vector<double> u = in.get_array<double>();
   for (std::size_t i = 0; i + 1 < u.size(); i += 2) r.u.emplace_back(u[i], u[i + 1]);
   r.u_rot = in.get_array<double>();
@@ -282,6 +292,25 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state,
     sum.F_cont_over_F0 = f_cont / solved / p.force_unit();
     sum.F_crit_over_F_cont = f_crit / f_cont;
   }
+  std::vector<double> inertia;
+  for (const ProbeRow& r : state.rows) {
+    if (std::isnan(r.f_inertia)) continue;
+    const double f = r.f_inertia / p.force_unit();
+    if (inertia.empty() || f > sum.f_inertia_max_over_F0) {
+      sum.f_inertia_max_over_F0 = f;
+      sum.f_inertia_max_contact = r.contact;
+    }
+    inertia.push_back(f);
+  }
+  sum.inertia_probes = static_cast<int>(inertia.size());
+  if (!inertia.empty()) {
+    const std::size_t h = inertia.size() / 2;
+    std::nth_element(inertia.begin(), inertia.begin() + static_cast<std::ptrdiff_t>(h), inertia.end());
+    sum.f_inertia_median_over_F0 = inertia[h];
+    if (inertia.size() % 2 == 0)
+      sum.f_inertia_median_over_F0 =
+          0.5 * (sum.f_inertia_median_over_F0 + *std::max_element(inertia.begin(), inertia.begin() + static_cast<std::ptrdiff_t>(h)));
+  }
   try {
     sum.fit = fit_power_law(state.average,
                             window.value_or(default_fit_window(p.cell, 2.0 * p.mean_radius())),
@@ -327,7 +356,7 @@ nlohmann::json to_json(const CampaignState& state) {
   nlohmann::json rows = nlohmann::json::array();
   for (const ProbeRow& r : state.rows)
     rows.push_back({r.contact, r.a, r.b, r.f_cont, r.f_crit, r.converged, r.sweeps, r.residual,
-                    r.violations, r.lambda_dt});
+                    r.violations, r.lambda_dt, nullable(r.f_inertia)});
   return {{"rows", rows}, {"average", state.average.to_json()}};
 }
 
@@ -343,12 +372,15 @@ CampaignState parse_campaign_state(const nlohmann::json& j, const Packing& p) {
   state.average = std::move(average);
   const auto contacts = static_cast<int>(p.contacts.size());
   for (const auto& r : j.at("rows")) {
-    if (!r.is_array() || r.size() != 10) throw Error("a row is not an array of 10 values");
+    // 10 values: a checkpoint written before f_inertia was recorded (its rows keep NaN)
+    if (!r.is_array() || (r.size() != 10 && r.size() != 11)) throw Error("a row is not an array of 11 values");
     const ProbeRow row{json_integer<int>(r[0], "row contact"),   json_integer<int>(r[1], "row grain a"),
                        json_integer<int>(r[2], "row grain b"),     r[3].get<double>(),
                        r[4].get<double>(),                        r[5].get<bool>(),
                        json_integer<long long>(r[6], "row sweeps"), r[7].get<double>(),
-                       json_integer<int>(r[8], "row violations"), r[9].get<double>()};
+                       json_integer<int>(r[8], "row violations"), r[9].get<double>(),
+                       r.size() == 11 ? nullable_from(r[10], "row f_inertia")
+                                      : std::numeric_limits<double>::quiet_NaN()};
     if (row.contact < 0 || row.contact >= contacts)
       throw Error("contact " + std::to_string(row.contact) + " out of range (the packing has " +
                   std::to_string(contacts) + " contacts)");

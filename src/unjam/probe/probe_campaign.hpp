@@ -7,6 +7,7 @@
 // skipped.
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,8 @@ struct ProbeRow {
   double residual = 0.0;
   int violations = 0;
   double lambda_dt = 0.0;
+  double f_inertia = std::numeric_limits<double>::quiet_NaN();  // ProbeResult::f_inertia (NaN: lp, no
+                                                                // solution, or an older checkpoint)
 };
 
 struct CampaignState {
@@ -95,6 +98,11 @@ struct CampaignSummary {
   int without_solution = 0;          // of them, those with no solution (residual kNoSolution)
   double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probes with a solution
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
+  // ProbeRow::f_inertia / F0 over the probes that have it (none for lp): how many, the
+  // median, the largest and its contact (-1 if none).
+  int inertia_probes = 0;
+  double f_inertia_median_over_F0 = 0.0, f_inertia_max_over_F0 = 0.0;
+  int f_inertia_max_contact = -1;
   bool has_fit = false;
   PowerLawFit fit;
   std::string fit_error;             // why there is no fit (e.g. cell too small)

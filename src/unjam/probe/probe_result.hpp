@@ -26,6 +26,13 @@ struct ProbeResult {
   // lp: largest violation of the field's equality constraints / g (0: exactly compatible).
   double residual = 0.0;
   int violations = 0;          // lp: unilateral conditions its field still breaks
+  // The largest net force on one grain over the step, max_i m_i |u_i| / dt^2 (simulation
+  // force units): the load carried by the grains' inertia instead of by the contacts
+  // (step_inertia_force). Quasi-static: ~ m g / dt^2, falling as dt^-2 with the field fixed;
+  // a region that slides away carries an unbalanced force that does not fall with dt, and
+  // its field grows as dt^2 (docs/probe.md, "The inertia of the step"). NaN for lp (no
+  // dynamics) and for a probe without a solution.
+  double f_inertia = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The residual of a probe whose solver found no solution (lemke: its path ended on a ray).
@@ -36,6 +43,10 @@ inline constexpr double kNoSolution = std::numeric_limits<double>::max();
 // (the cell's affine strain stretches the branch vector l; length units). The probed pair
 // must open by g, a touching pair must not go below zero.
 double contact_opening(const Packing& packing, const ProbeResult& r, int k);
+
+// max_i m_i |u_i| / dt^2 over the grains of the probe's field (ProbeResult::f_inertia); NaN
+// for a probe without a field.
+double step_inertia_force(const Packing& packing, const ProbeResult& r, double dt);
 
 // The probe's field for the exports (packing/export.hpp): u, u / g and the rotations.
 GrainDisplacement grain_displacement(const ProbeResult& r);
