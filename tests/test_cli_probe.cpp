@@ -162,6 +162,34 @@ TEST_F(CliProbe, TheExactProbeDefaultsToTheQuasiStaticTimeStep) {
   EXPECT_DOUBLE_EQ(read_json_file(nlgs / "probe_summary.json")["settings"]["dt"].get<double>(), 1e-3);
 }
 
+TEST_F(CliProbe, MaxInertiaLeavesProbesOutOfTheAveragesOnly) {
+  // --max-inertia X: a threshold above every probe's f_inertia changes no output but the
+  // recorded setting; one below every probe leaves all of them out of the averages and the
+  // means (their rows stay, counted as inertial).
+  const std::string args = " --sample 4 --method cd --quiet --threads 1 --out ";
+  const fs::path plain = root_ / "inertia-none", high = root_ / "inertia-high", low = root_ / "inertia-low";
+  for (const fs::path& d : {plain, high, low}) fs::create_directories(d);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(plain)).exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(high) + " --max-inertia 1").exit_code, 0);
+  const testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(low) + " --max-inertia 1e-12");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("left out of the means and averages: 4 probes with f_inertia above 1e-12 F0"),
+            std::string::npos) << r.output;
+  for (const char* f : {"probes.csv", "response_field.csv", "response_profile.csv"})
+    EXPECT_EQ(read_file(plain / f), read_file(high / f)) << f;
+  EXPECT_EQ(read_file(plain / "probes.csv"), read_file(low / "probes.csv"));
+  EXPECT_NE(read_file(plain / "response_profile.csv"), read_file(low / "response_profile.csv"));
+  const nlohmann::json a = read_json_file(plain / "probe_summary.json"), b = read_json_file(high / "probe_summary.json"),
+                       c = read_json_file(low / "probe_summary.json");
+  EXPECT_FALSE(a["settings"].contains("max_inertia_F0"));
+  EXPECT_DOUBLE_EQ(b["settings"]["max_inertia_F0"].get<double>(), 1.0);
+  EXPECT_EQ(a["inertial"].get<int>(), 0);
+  EXPECT_EQ(b["inertial"].get<int>(), 0);
+  EXPECT_EQ(c["inertial"].get<int>(), 4);
+  EXPECT_EQ(a["F_crit_over_F_cont"], b["F_crit_over_F_cont"]);
+  EXPECT_EQ(c["probes"].get<int>(), 4);
+}
+
 TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   // A cd campaign stopped at dt = 1e-3 (exit 3) is not resumed at the default dt: the error
   // names the setting and both values, the checkpoint is kept, and the same command with

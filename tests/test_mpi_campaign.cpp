@@ -257,6 +257,29 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   expect_same_probe_outputs(one, out);
 }
 
+TEST_F(Distributed, ShardsMergedKeepTheLargestInertiaOfTheirRuns) {
+  // --max-inertia travels with the shards: the merged outputs are one process's, with the
+  // same probes left out of the averages and the means.
+  const auto cd = [&](const std::string& name, const std::string& extra) {
+    fs::create_directories(root_ / name);
+    const CommandResult r = shell(unjam(0, "probe '" + kP50.string() + "' --sample 6 --method cd --max-inertia 1.5e-5 "
+                                           "--threads 1 --quiet --out '" + (root_ / name).string() + "' " + extra));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return root_ / name;
+  };
+  const fs::path one = cd("cd-one", "");
+  for (int i = 0; i < 2; ++i) cd("cd-shards", "--shard " + std::to_string(i) + "/2");
+  const fs::path out = root_ / "cd-shards";
+  const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
+  ASSERT_EQ(merged.exit_code, 0) << merged.output;
+  expect_same_probe_outputs(one, out);
+  const auto a = nlohmann::json::parse(read_file(one / "probe_summary.json")),
+             b = nlohmann::json::parse(read_file(out / "probe_summary.json"));
+  EXPECT_EQ(a.at("inertial"), b.at("inertial"));
+  EXPECT_GT(a.at("inertial").get<int>(), 0);
+  EXPECT_LT(a.at("inertial").get<int>(), 6);
+}
+
 TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {
   const auto bounds = [&](const std::string& name, int ranks, const std::string& extra, int expect_code) {
     fs::create_directories(root_ / name);

@@ -423,6 +423,68 @@ TEST(ProbeCampaign, InertiaOfTheStepIsSummarisedAndSurvivesTheCheckpoint) {
   EXPECT_THROW(campaign_state_from_json(bad, p), Error);
 }
 
+// --max-inertia: the probes whose f_inertia exceeds the threshold keep their rows but stay out
+// of the averages and the means (counted as inertial); the rest of the campaign is unchanged.
+TEST(ProbeCampaign, ProbesAboveTheLargestInertiaStayOutOfTheAveragesAndMeans) {
+  const Packing& p = fixture_p50();
+  const double F0 = p.force_unit();
+  CampaignSettings s;
+  s.method = ProbeMethod::kCd;
+  s.sample = 12;
+  const auto run = [&](const CampaignSettings& set) {
+    CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+    EXPECT_TRUE(run_campaign(p, set, st));
+    return st;
+  };
+  const CampaignState all = run(s);
+  ASSERT_EQ(all.rows.size(), 12u);
+  std::vector<double> inertia;
+  for (const ProbeRow& r : all.rows) inertia.push_back(r.f_inertia / F0);
+  std::sort(inertia.begin(), inertia.end());
+  ASSERT_LT(inertia[5], inertia[6]);
+  CampaignSettings capped = s;
+  capped.max_inertia = 0.5 * (inertia[5] + inertia[6]);  // the 6 largest above it
+  const CampaignState part = run(capped);
+  ASSERT_EQ(part.rows.size(), all.rows.size());
+  double f_cont = 0.0, f_crit = 0.0;
+  int below = 0;
+  for (std::size_t i = 0; i < part.rows.size(); ++i) {
+    const ProbeRow& r = part.rows[i];
+    EXPECT_EQ(r.f_crit, all.rows[i].f_crit);
+    EXPECT_EQ(r.f_inertia, all.rows[i].f_inertia);
+    const bool in = r.f_inertia <= capped.max_inertia * F0;
+    EXPECT_EQ(enters_averages(r, capped, F0), in);
+    EXPECT_EQ(part.average.has_probe(r.contact), in) << "contact " << r.contact;
+    EXPECT_TRUE(all.average.has_probe(r.contact));
+    if (!in) continue;
+    ++below;
+    f_cont += r.f_cont;
+    f_crit += r.f_crit;
+  }
+  EXPECT_EQ(below, 6);
+  const CampaignSummary sum = summarize(p, part, std::nullopt, capped.max_inertia);
+  EXPECT_EQ(sum.inertial, 6);
+  EXPECT_EQ(sum.without_solution, 0);
+  EXPECT_DOUBLE_EQ(sum.F_crit_over_F_cont, f_crit / f_cont);
+  EXPECT_DOUBLE_EQ(sum.F_cont_over_F0, f_cont / 6 / F0);
+  EXPECT_EQ(summarize(p, all).inertial, 0);
+  // The setting is recorded where set (a checkpoint of the other setting does not resume).
+  EXPECT_DOUBLE_EQ(to_json([&] { CampaignSettings c = capped; c.nlgs.model = p.meta.contact; return c; }())
+                       .at("max_inertia_F0").get<double>(), capped.max_inertia);
+  EXPECT_FALSE(to_json([&] { CampaignSettings c = s; c.nlgs.model = p.meta.contact; return c; }())
+                   .contains("max_inertia_F0"));
+  // lp has no step, hence no inertia; a negative or NaN threshold is refused.
+  CampaignSettings bad = capped;
+  bad.method = ProbeMethod::kLp;
+  EXPECT_THROW(validate(bad), Error);
+  for (const double v : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bad = capped;
+    bad.max_inertia = v;
+    EXPECT_THROW(validate(bad), Error);
+  }
+  EXPECT_NO_THROW(validate(capped));
+}
+
 // A cancel predicate that returns true from its `fire`-th call on (0: never), counting its
 // calls; thread safe.
 struct CountingCancel {

@@ -42,6 +42,7 @@ struct ProbeOptions {
   std::uint64_t seed = 1;
   double g = 1e-9, velocity_tol = 1e-6;
   double dt = 0.0;                 // 0: default_probe_dt(method, g)
+  double max_inertia = 0.0;        // > 0: CampaignSettings::max_inertia (F0)
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
@@ -65,6 +66,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.nlgs.dt = o.dt > 0.0 ? o.dt : default_probe_dt(s.method, o.g);
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
+  s.max_inertia = o.max_inertia;
   validate(s);
   return s;
 }
@@ -276,7 +278,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file) {
   const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
-                            {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}}},
+                            {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}, {"max_inertia", o.max_inertia}}},
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
                             {"wall_seconds", wall}, {"ranks", rank_loads_json<nlohmann::json>(dist.loads(), "probes")}};
   write_file_atomic(file, j.dump());
@@ -289,7 +291,7 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
                      const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
                      const fs::path& out) {
-  const CampaignSummary sum = summarize(p, state, fit_window(o));
+  const CampaignSummary sum = summarize(p, state, fit_window(o), o.max_inertia);
   const PackingStats stats = compute_packing_stats(p);
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
   write_file_atomic(out / "response_field.csv", state.average.field_csv());
@@ -313,6 +315,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");
+  if (o.max_inertia > 0.0)
+    std::printf("  left out of the means and averages: %d probes with f_inertia above %g F0 (--max-inertia)\n",
+                sum.inertial, o.max_inertia);
   if (sum.inertia_probes > 0)
     std::printf("  inertia of the step (largest net force on a grain) / F0: median %.2e, largest %.2e (contact %d)\n",
                 sum.f_inertia_median_over_F0, sum.f_inertia_max_over_F0, sum.f_inertia_max_contact);
@@ -361,6 +366,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   o.method = first.at("options").at("method").get<std::string>();
   o.g = first.at("options").at("g").get<double>();
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
+  o.max_inertia = first.at("options").value("max_inertia", 0.0);  // absent: shards of an earlier unjam
   CampaignState state = empty_campaign_state(p);
   std::vector<RankLoad> loads;
   double wall = 0.0;
@@ -416,6 +422,11 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--dt", o->dt,
                   "nlgs, lemke, cd: time step of the probe (default: lemke, cd sqrt(g / 1e-5), the "
                   "quasi-static limit, 1e-2 at g = 1e-9; nlgs 1e-3)")
+      ->check(positive_number());
+  cmd->add_option("--max-inertia", o->max_inertia,
+                  "nlgs, lemke, cd: leave out of the averages and means the probes whose step's largest net force on "
+                  "a grain, f_inertia, exceeds this many F0 (a region sliding away: no quasi-static field; their rows "
+                  "stay; docs/probe.md, \"The inertia of the step\"; default: none)")
       ->check(positive_number());
   cmd->add_option("--velocity-tol", o->velocity_tol, "nlgs: converged when max |dU| per sweep < tol g/dt")
       ->capture_default_str()->check(positive_number());

@@ -74,6 +74,7 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
       {"probes", sum.probes},
       {"not_converged", sum.not_converged},
       {"without_solution", sum.without_solution},
+      {"inertial", sum.inertial},
       {"F_cont_over_F0", sum.F_cont_over_F0},
       {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
   };

@@ -174,9 +174,17 @@ void validate(const CampaignSettings& s) {
   if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
       !positive(s.nlgs.velocity_tol))
     throw Error("the probe's g, dt and velocity_tol must be positive");
+  if (!(s.max_inertia >= 0.0 && std::isfinite(s.max_inertia)))
+    throw Error("the largest inertia of a probe that enters the averages must be >= 0 and finite (in F0)");
+  if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
+    throw Error("a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp");
   if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
     throw Error(std::string("the cd start '") + cd_start_name(s.cd.start) + "' applies to the cd method only (the method is " +
                 method_name(s.method) + ")");
+}
+
+bool enters_averages(const ProbeRow& r, const CampaignSettings& s, double f0) {
+  return r.residual != kNoSolution && !(s.max_inertia > 0.0 && r.f_inertia > s.max_inertia * f0);
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
@@ -260,8 +268,8 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   loop.gather = [&](std::vector<TaskResult>& results) {
     for (const TaskResult& tr : results) {
       const ProbeResult r = decode(tr.bytes);
-      if (r.residual != kNoSolution) add_to_average(p, s, loaded, r, state.average);
       const ProbeRow row = row_of(r);
+      if (enters_averages(row, s, p.force_unit())) add_to_average(p, s, loaded, r, state.average);
       state.rows.insert(std::upper_bound(state.rows.begin(), state.rows.end(), row,
                                          [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; }),
                         row);
@@ -272,18 +280,19 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   return distributor.run(todo, loop);
 }
 
-CampaignSummary summarize(const Packing& p, const CampaignState& state,
-                          std::optional<FitWindow> window, int bootstrap_samples, std::uint64_t seed) {
+CampaignSummary summarize(const Packing& p, const CampaignState& state, std::optional<FitWindow> window,
+                          double max_inertia, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;
   sum.probes = static_cast<int>(state.rows.size());
+  CampaignSettings rule;
+  rule.max_inertia = max_inertia;
   double f_cont = 0.0, f_crit = 0.0;
   int solved = 0;
   for (const ProbeRow& r : state.rows) {
     if (!r.converged) ++sum.not_converged;
-    if (r.residual == kNoSolution) {
-      ++sum.without_solution;
-      continue;
-    }
+    if (r.residual == kNoSolution) ++sum.without_solution;
+    else if (!enters_averages(r, rule, p.force_unit())) ++sum.inertial;
+    if (!enters_averages(r, rule, p.force_unit())) continue;
     ++solved;
     f_cont += r.f_cont;
     f_crit += r.f_crit;
@@ -344,6 +353,7 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // recorded where it is not the default, so that earlier checkpoints still resume
     if (s.method == ProbeMethod::kCd && s.cd.start != CdPathStart::static_network)
       j["cd_start"] = cd_start_name(s.cd.start);
+    if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
       j["velocity_tol"] = s.nlgs.velocity_tol;
       j["max_sweeps"] = s.nlgs.max_sweeps;

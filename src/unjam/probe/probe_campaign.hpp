@@ -59,6 +59,10 @@ struct CampaignSettings {
   CdPathSettings cd;                    // the cd method's path (where it starts, compliance)
   bool total_displacement = false;      // averages with the affine part lambda dt (r - r_c)
   double force_threshold = 1e-9;        // probe contacts with fn > threshold F0
+  // > 0 (nlgs, lemke, cd): a probe whose f_inertia exceeds max_inertia F0 (a region that
+  // slides away against its inertia: no quasi-static field) keeps its row but stays out of
+  // the averages and the means (enters_averages; docs/probe.md, "The inertia of the step").
+  double max_inertia = 0.0;
   int sample = 0;                       // > 0: a random subset of this many contacts
   std::uint64_t seed = 1;               // of the subset
 };
@@ -96,7 +100,8 @@ struct CampaignSummary {
   int probes = 0;
   int not_converged = 0;             // with the probes that found no solution (not in the means)
   int without_solution = 0;          // of them, those with no solution (residual kNoSolution)
-  double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probes with a solution
+  int inertial = 0;                  // solved, left out for f_inertia > max_inertia F0
+  double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probes that enter the averages
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
   // ProbeRow::f_inertia / F0 over the probes that have it (none for lp): how many, the
   // median, the largest and its contact (-1 if none).
@@ -113,9 +118,15 @@ struct CampaignSummary {
 // Throws unjam::Error for recorded settings (meta.settings) of the wrong type or range.
 CampaignSettings campaign_settings_for(const Packing& packing);
 
-// Throws unjam::Error unless g, dt and velocity_tol are positive and finite, and for a cd start
-// other than the static network with a method other than cd.
+// Throws unjam::Error unless g, dt and velocity_tol are positive and finite and max_inertia is
+// finite and >= 0, for a cd start other than the static network with a method other than cd,
+// and for max_inertia > 0 with lp (which has no time step).
 void validate(const CampaignSettings& settings);
+
+// The one rule for which probes enter a campaign's averages and means: those with a solution
+// and, where settings.max_inertia > 0, with f_inertia at most max_inertia F0 (f0: the
+// packing's F0; a row without f_inertia, NaN, enters).
+bool enters_averages(const ProbeRow& row, const CampaignSettings& settings, double f0);
 
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
@@ -153,8 +164,9 @@ std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSe
                                         const std::function<void(int, int)>& progress = {});
 
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
+// The means take the probes that enter_averages with max_inertia (the campaign's setting).
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
-                          std::optional<FitWindow> window = std::nullopt,
+                          std::optional<FitWindow> window = std::nullopt, double max_inertia = 0.0,
                           int bootstrap_samples = 200, std::uint64_t seed = 1);
 
 // The settings of a campaign (touch_gap and M_lambda: those of the method's contact model).
