@@ -71,14 +71,6 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
 
 }  // namespace
 
-double quantile(std::vector<double> x, double q) {
-  std::sort(x.begin(), x.end());
-  const double pos = q * (x.size() - 1.0);
-  const std::size_t i = static_cast<std::size_t>(pos);
-  if (i + 1 >= x.size()) return x.back();
-  return x[i] + (pos - i) * (x[i + 1] - x[i]);
-}
-
 CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio) {
   const auto within = [&ratio](double f) {
     return static_cast<int>(

@@ -15,6 +15,7 @@
 
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/quantile.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/ensemble/hit_and_run.hpp"
 #include "unjam/ensemble/random_walk.hpp"
@@ -78,8 +79,6 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
                                          const std::string& method);
 
-// Linear-interpolation quantile q in [0, 1] of x (non-empty).
-double quantile(std::vector<double> x, double q);
 
 // F_crit / fn_max over the probed contacts (EnsembleReport::f_crit_over_fn_max): its min,
 // median and max (quantile), and how many ratios lie within 1, 2 and 5 % of 1 (|x - 1| <= f).

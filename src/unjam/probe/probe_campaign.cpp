@@ -15,6 +15,7 @@
 #include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/json_integer.hpp"
+#include "unjam/core/quantile.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
@@ -289,10 +290,11 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
   double f_cont = 0.0, f_crit = 0.0;
   int solved = 0;
   for (const ProbeRow& r : state.rows) {
+    const bool enters = enters_averages(r, rule, p.force_unit());
     if (!r.converged) ++sum.not_converged;
     if (r.residual == kNoSolution) ++sum.without_solution;
-    else if (!enters_averages(r, rule, p.force_unit())) ++sum.inertial;
-    if (!enters_averages(r, rule, p.force_unit())) continue;
+    else if (!enters) ++sum.inertial;
+    if (!enters) continue;
     ++solved;
     f_cont += r.f_cont;
     f_crit += r.f_crit;
@@ -312,14 +314,7 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
     inertia.push_back(f);
   }
   sum.inertia_probes = static_cast<int>(inertia.size());
-  if (!inertia.empty()) {
-    const std::size_t h = inertia.size() / 2;
-    std::nth_element(inertia.begin(), inertia.begin() + static_cast<std::ptrdiff_t>(h), inertia.end());
-    sum.f_inertia_median_over_F0 = inertia[h];
-    if (inertia.size() % 2 == 0)
-      sum.f_inertia_median_over_F0 =
-          0.5 * (sum.f_inertia_median_over_F0 + *std::max_element(inertia.begin(), inertia.begin() + static_cast<std::ptrdiff_t>(h)));
-  }
+  if (!inertia.empty()) sum.f_inertia_median_over_F0 = quantile(std::move(inertia), 0.5);
   try {
     sum.fit = fit_power_law(state.average,
                             window.value_or(default_fit_window(p.cell, 2.0 * p.mean_radius())),
