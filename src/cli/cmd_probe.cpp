@@ -318,9 +318,13 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (o.max_inertia > 0.0)
     std::printf("  left out of the means and averages: %d probes with f_inertia above %g F0 (--max-inertia)\n",
                 sum.inertial, o.max_inertia);
-  if (sum.inertia_probes > 0)
-    std::printf("  inertia of the step (largest net force on a grain) / F0: median %.2e, largest %.2e (contact %d)\n",
+  if (sum.inertia_probes > 0) {
+    std::printf("  inertia of the step (largest net force on a grain) / F0: median %.2e, largest %.2e (contact %d)",
                 sum.f_inertia_median_over_F0, sum.f_inertia_max_over_F0, sum.f_inertia_max_contact);
+    if (sum.inertia_probes < sum.probes)  // rows of a checkpoint written before f_inertia, or without a solution
+      std::printf(", over the %d probes that record it", sum.inertia_probes);
+    std::printf("\n");
+  }
   if (sum.has_fit)
     std::printf("  d(r) ~ r^-alpha: alpha = %.3f +- %.3f  (fit over r in [%.2f, %.2f], %d bins, R2 %.3f)\n",
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);
