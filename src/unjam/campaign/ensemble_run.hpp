@@ -79,7 +79,6 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
                                          const std::string& method);
 
-
 // F_crit / fn_max over the probed contacts (EnsembleReport::f_crit_over_fn_max): its min,
 // median and max (quantile), and how many ratios lie within 1, 2 and 5 % of 1 (|x - 1| <= f).
 struct CriticalForceRatio {

@@ -184,8 +184,8 @@ void validate(const CampaignSettings& s) {
                 method_name(s.method) + ")");
 }
 
-bool enters_averages(const ProbeRow& r, const CampaignSettings& s, double f0) {
-  return r.residual != kNoSolution && !(s.max_inertia > 0.0 && r.f_inertia > s.max_inertia * f0);
+bool enters_averages(const ProbeRow& r, double max_inertia, double f0) {
+  return r.residual != kNoSolution && !(max_inertia > 0.0 && r.f_inertia > max_inertia * f0);
 }
 
 std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
@@ -270,7 +270,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
     for (const TaskResult& tr : results) {
       const ProbeResult r = decode(tr.bytes);
       const ProbeRow row = row_of(r);
-      if (enters_averages(row, s, p.force_unit())) add_to_average(p, s, loaded, r, state.average);
+      if (enters_averages(row, s.max_inertia, p.force_unit())) add_to_average(p, s, loaded, r, state.average);
       state.rows.insert(std::upper_bound(state.rows.begin(), state.rows.end(), row,
                                          [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; }),
                         row);
@@ -285,12 +285,10 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
                           double max_inertia, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;
   sum.probes = static_cast<int>(state.rows.size());
-  CampaignSettings rule;
-  rule.max_inertia = max_inertia;
   double f_cont = 0.0, f_crit = 0.0;
   int solved = 0;
   for (const ProbeRow& r : state.rows) {
-    const bool enters = enters_averages(r, rule, p.force_unit());
+    const bool enters = enters_averages(r, max_inertia, p.force_unit());
     if (!r.converged) ++sum.not_converged;
     if (r.residual == kNoSolution) ++sum.without_solution;
     else if (!enters) ++sum.inertial;

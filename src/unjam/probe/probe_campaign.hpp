@@ -124,9 +124,9 @@ CampaignSettings campaign_settings_for(const Packing& packing);
 void validate(const CampaignSettings& settings);
 
 // The one rule for which probes enter a campaign's averages and means: those with a solution
-// and, where settings.max_inertia > 0, with f_inertia at most max_inertia F0 (f0: the
-// packing's F0; a row without f_inertia, NaN, enters).
-bool enters_averages(const ProbeRow& row, const CampaignSettings& settings, double f0);
+// and, where max_inertia (CampaignSettings::max_inertia) > 0, with f_inertia at most
+// max_inertia F0 (f0: the packing's F0; a row without f_inertia, NaN, enters).
+bool enters_averages(const ProbeRow& row, double max_inertia, double f0);
 
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
