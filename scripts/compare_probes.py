@@ -11,10 +11,15 @@ are in units of F0 = 2 R_avg P_ext, residuals in units of the probe's opening g.
 
 Rules (per contact of a pair, from the cd run's `residual`):
   solved   the cd step has a solution: residual <= 1e-3 g (a probe without one has residual
-           1.8e308); only solved contacts enter the means and the ratios
+           1.8e308); only solved contacts enter the means and the ratios, and of them
+           only those that are not inertial (below)
   exact    the cd step solved exactly: residual <= 1e-6 g (`converged` in probes.csv)
   ratio    f_crit(cd) / fn_max(lp), over the solved contacts with fn_max > 0 (a contact with
            fn_max <= 0 has no ratio: a warning says how many)
+  inertial a solved contact whose cd step's f_inertia (the largest net force on a grain,
+           docs/probe.md, "The inertia of the step") is above the cd campaign's --max-inertia
+           (settings.max_inertia_F0 of its summary, in F0): left out of the means and the
+           ratios, as the campaign leaves it out of its own; none where it was not set
 Contacts probed by only one run of a pair are ignored (a warning gives how many and which).
 
 Outputs, each written atomically (a temporary file, then os.replace), in OUT (default
@@ -28,10 +33,14 @@ compare-probes):
                     power-law fits of each probe_summary.json; empty where a fit failed),
                     pieces_median (median over the shared contacts of cd's `sweeps`, the
                     pieces of its path), cpu_s_per_probe_cd (sum of the cd ranks'
-                    busy_seconds / the cd campaign's probes)
+                    busy_seconds / the cd campaign's probes), inertial (solved contacts
+                    left out by --max-inertia), f_inertia_median_F0, f_inertia_max_F0 and
+                    f_inertia_max_contact (cd's f_inertia / F0 over the solved contacts
+                    that record it; empty for campaigns made before it was recorded)
   OUT/ratios.csv    one row per shared contact and pair: packing, mu, N, seed, contact,
                     f_cont, f_crit_lp (fn_max), f_crit_cd, ratio (empty where there is none),
-                    residual_cd, exact (0/1), solved (0/1)
+                    residual_cd, exact (0/1), solved (0/1), f_inertia_cd (in F0; empty
+                    where it is not recorded), inertial (0/1)
   OUT/compare.md    the per-pair table in Markdown, with the command that made it and the
                     program version of the campaigns
   OUT/compare.json  the command, the campaigns (directories, commands, program versions),
@@ -77,9 +86,10 @@ F_CONT_REL_TOL = 1e-9
 COMPARE_COLUMNS = ["packing", "mu", "N", "seed", "label", "probes", "exact", "solved",
                    "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd", "ratio_median", "ratio_q1",
                    "ratio_q3", "ratio_min", "ratio_max", "alpha_lp", "alpha_lp_err", "alpha_cd",
-                   "alpha_cd_err", "pieces_median", "cpu_s_per_probe_cd"]
+                   "alpha_cd_err", "pieces_median", "cpu_s_per_probe_cd", "inertial",
+                   "f_inertia_median_F0", "f_inertia_max_F0", "f_inertia_max_contact"]
 RATIO_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "f_crit_lp", "f_crit_cd",
-                 "ratio", "residual_cd", "exact", "solved"]
+                 "ratio", "residual_cd", "exact", "solved", "f_inertia_cd", "inertial"]
 
 
 class Parser(argparse.ArgumentParser):
@@ -137,7 +147,8 @@ def read_campaign(directory, method):
         raise UserError(f"{spath}: missing 'packing'")
     ppath = os.path.join(directory, "probes.csv")
     t = read_csv(ppath, ["contact", "a", "b", "f_cont", "f_crit", "sweeps", "residual"],
-                 text=["method"], allow_nan=["f_crit"], min_rows=1)
+                 optional=["f_inertia"], text=["method"], allow_nan=["f_crit", "f_inertia"],
+                 min_rows=1)
     if "method" not in t:
         raise UserError(f"{ppath}: missing column 'method'")
     if any(m != method for m in t["method"]):
@@ -148,6 +159,7 @@ def read_campaign(directory, method):
     a = _integer_column(t, "a", ppath)
     b = _integer_column(t, "b", ppath)
     sweeps = _integer_column(t, "sweeps", ppath)
+    f_inertia = t["f_inertia"] if "f_inertia" in t else [math.nan] * len(contact)
     rows = {}
     for i, k in enumerate(contact):
         if k in rows:
@@ -156,8 +168,18 @@ def read_campaign(directory, method):
             raise UserError(f"{ppath}: contact {k} has a negative residual")
         rows[k] = {"a": a[i], "b": b[i], "f_cont": float(t["f_cont"][i]),
                    "f_crit": float(t["f_crit"][i]), "sweeps": sweeps[i],
-                   "residual": float(t["residual"][i])}
+                   "residual": float(t["residual"][i]), "f_inertia": float(f_inertia[i])}
     return {"dir": directory, "summary": summary, "summary_path": spath, "rows": rows}
+
+
+def max_inertia_F0(campaign):
+    """The campaign's --max-inertia in F0 (settings.max_inertia_F0), 0 where it was not set."""
+    settings = campaign["summary"].get("settings")
+    v = settings.get("max_inertia_F0", 0.0) if isinstance(settings, dict) else 0.0
+    if not isinstance(v, (int, float)) or isinstance(v, bool) or not v >= 0:
+        raise UserError(f"{campaign['summary_path']}: settings.max_inertia_F0 is not a "
+                        f"number >= 0: {v!r}")
+    return float(v)
 
 
 def _same_value(x, y):
@@ -214,13 +236,20 @@ def compare_pair(cd, lp, label):
 
     packing = {"packing": s_cd["packing"], "mu": _optional_number(cd, "mu"),
                "N": s_cd.get("N"), "seed": s_cd.get("seed")}
-    rows, ratios, no_lp = [], [], []
+    rows, ratios, no_lp, inertia = [], [], [], []
     sum_cont = sum_cd = sum_lp = 0.0
-    n_exact = n_solved = 0
+    n_exact = n_solved = n_inertial = 0
+    line = max_inertia_F0(cd)
+    F0 = _optional_number(cd, "F0")
     for k in shared:
         r, q = cd["rows"][k], lp["rows"][k]
         solved = r["residual"] <= SOLVED_RESIDUAL
         exact = r["residual"] <= EXACT_RESIDUAL
+        f_inertia = r["f_inertia"] / F0 if F0 > 0 else math.nan
+        # The campaign's own rule (enters_averages, probe/probe_campaign): NaN stays in.
+        inertial = solved and line > 0 and f_inertia > line
+        if solved and math.isfinite(f_inertia):
+            inertia.append((f_inertia, k))
         ratio = math.nan
         if solved:
             if not math.isfinite(r["f_crit"]):
@@ -230,23 +259,31 @@ def compare_pair(cd, lp, label):
                 raise UserError(f"{lp['dir']}/probes.csv: contact {k}: f_crit is not a number")
             n_solved += 1
             n_exact += exact
+            if q["f_crit"] > 0:
+                ratio = r["f_crit"] / q["f_crit"]
+        if inertial:
+            n_inertial += 1
+        elif solved:
             sum_cont += r["f_cont"]
             sum_cd += r["f_crit"]
             sum_lp += q["f_crit"]
             if q["f_crit"] > 0:
-                ratio = r["f_crit"] / q["f_crit"]
                 ratios.append(ratio)
             else:
                 no_lp.append(k)
         rows.append({**packing, "contact": k, "f_cont": r["f_cont"], "f_crit_lp": q["f_crit"],
                      "f_crit_cd": r["f_crit"], "ratio": ratio, "residual_cd": r["residual"],
-                     "exact": int(exact), "solved": int(solved)})
+                     "exact": int(exact), "solved": int(solved), "f_inertia_cd": f_inertia,
+                     "inertial": int(inertial)})
     if no_lp:
         warn(f"{name}: {len(no_lp)} solved contact{'s' if len(no_lp) > 1 else ''} with "
              f"fn_max <= 0 left out of the ratios: {_list(no_lp)}")
     if n_solved == 0:
         warn(f"{name}: no shared contact is solved by cd (residual <= {SOLVED_RESIDUAL:g} g): "
              f"no means and no ratios")
+    elif n_inertial == n_solved:
+        warn(f"{name}: every solved contact is above --max-inertia {line:g} F0: no means and "
+             f"no ratios")
 
     if len(ratios) >= 2:
         q1, _, q3 = statistics.quantiles(ratios, n=4)
@@ -276,6 +313,10 @@ def compare_pair(cd, lp, label):
         "alpha_cd_err": _optional_number(cd, "alpha_err"),
         "pieces_median": float(statistics.median(cd["rows"][k]["sweeps"] for k in shared)),
         "cpu_s_per_probe_cd": busy / probes_cd,
+        "inertial": n_inertial,
+        "f_inertia_median_F0": statistics.median(v for v, _ in inertia) if inertia else math.nan,
+        "f_inertia_max_F0": max(inertia)[0] if inertia else math.nan,
+        "f_inertia_max_contact": max(inertia)[1] if inertia else None,
     }
     return numbers, rows, ratios
 
@@ -343,18 +384,21 @@ def pair_name(p):
 
 TABLE_HEAD = ["pair", "probes", "exact", "solved", "<F_crit>/<F_cont> lp",
               "<F_crit>/<F_cont> cd", "ratio median [q1, q3]", "ratio min–max",
-              "alpha lp", "alpha cd", "pieces", "CPU s/probe cd"]
+              "alpha lp", "alpha cd", "pieces", "CPU s/probe cd", "f_inertia/F0 median (max)"]
 
 
 def table_cells(p):
-    return [pair_name(p), str(p["probes"]), str(p["exact"]), str(p["solved"]),
+    solved = str(p["solved"]) + (f" ({p['inertial']} inertial)" if p["inertial"] else "")
+    return [pair_name(p), str(p["probes"]), str(p["exact"]), solved,
             _fixed(p["F_crit_over_F_cont_lp"], 3), _fixed(p["F_crit_over_F_cont_cd"], 3),
             f"{_fixed(p['ratio_median'], 3)} [{_fixed(p['ratio_q1'], 3)}, "
             f"{_fixed(p['ratio_q3'], 3)}]",
             f"{_fixed(p['ratio_min'], 3)}–{_fixed(p['ratio_max'], 3)}",
             _alpha(p["alpha_lp"], p["alpha_lp_err"]), _alpha(p["alpha_cd"], p["alpha_cd_err"]),
             f"{p['pieces_median']:g}",
-            f"{p['cpu_s_per_probe_cd']:.3g}" if math.isfinite(p["cpu_s_per_probe_cd"]) else "–"]
+            f"{p['cpu_s_per_probe_cd']:.3g}" if math.isfinite(p["cpu_s_per_probe_cd"]) else "–",
+            f"{p['f_inertia_median_F0']:.1e} ({p['f_inertia_max_F0']:.1e})"
+            if math.isfinite(p["f_inertia_median_F0"]) else "–"]
 
 
 def markdown(pairs, campaigns, command):
@@ -370,7 +414,10 @@ def markdown(pairs, campaigns, command):
             f"over the contacts solved by cd, both methods on the same contacts. ratio: "
             f"F_crit(cd) / fn_max(lp) per solved contact (quartiles: statistics.quantiles, "
             f"n=4). alpha: the power-law fit of each campaign (± its error). pieces: median "
-            f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe.", ""]
+            f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe. "
+            f"f_inertia: the largest net force on a grain in the cd step, over the solved "
+            f"contacts; inertial: solved contacts above the cd campaign's --max-inertia, left "
+            f"out of the means and ratios as the campaign leaves them out.", ""]
     for i, (p, (cd, lp)) in enumerate(zip(pairs, zip(campaigns[::2], campaigns[1::2])), 1):
         out.append(f"{i}. {pair_name(p)}: packing `{p['packing']}`, cd `{cd['dir']}`, "
                    f"lp `{lp['dir']}`")

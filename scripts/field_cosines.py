@@ -20,8 +20,10 @@ exactly (docs/probe.md). This probes every listed contact by both, through the P
 
 Outputs, in DIR (default PACKING-fields):
   fields.csv   contact, a, b, f_cont, f_crit_lp, f_crit_cd, residual_cd, exact (cd residual
-               at most 1e-6 g: unjam's own verdict), cosine, norm_ratio, in the order of the
-               list. Written after every chunk of --chunk contacts; a run stopped by Ctrl-C
+               at most 1e-6 g: unjam's own verdict), cosine, cosine_near, norm_ratio,
+               f_inertia_cd (the cd step's largest net force on a grain, in the units of
+               f_crit: docs/probe.md, "The inertia of the step"), in the order of the list.
+               Written after every chunk of --chunk contacts; a run stopped by Ctrl-C
                resumes from it (the same command skips the contacts it already holds; a
                table of other contacts or other settings is refused, not overwritten).
   settings.json  the packing, --cd-start, --g, --dt and --near the table was made with
@@ -56,7 +58,9 @@ from stage_runner import read_json, write_json  # noqa: E402
 import unjam_plot  # noqa: E402
 
 COLUMNS = ["contact", "a", "b", "f_cont", "f_crit_lp", "f_crit_cd", "residual_cd", "exact",
-           "cosine", "cosine_near", "norm_ratio"]
+           "cosine", "cosine_near", "norm_ratio", "f_inertia_cd"]
+# The columns of tables written before f_inertia_cd: resumed, with that cell left empty.
+COLUMNS_BEFORE_INERTIA = COLUMNS[:-1]
 
 
 def import_unjam():
@@ -153,10 +157,10 @@ def read_done(a, ks, settings):
         return []
     with open(path, newline="") as f:
         r = csv.DictReader(f)
-        if r.fieldnames != COLUMNS:
+        if r.fieldnames not in (COLUMNS, COLUMNS_BEFORE_INERTIA):
             sys.exit(f"field_cosines: {path} is not this script's table (columns {r.fieldnames}); "
                      "move it away or choose another --out")
-        rows = list(r)
+        rows = [{"f_inertia_cd": "", **row} for row in r]
     recorded = read_json(saved)
     if recorded != settings:
         sys.exit(f"field_cosines: {path} was made with other settings ({saved}: {recorded}); "
@@ -235,7 +239,8 @@ def main(argv):
                     "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
                     "cosine_near": repr(cosine(r_lp.u[near], r_cd.u[near])) if solved else "",
                     "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
-                    if solved and np.linalg.norm(r_lp.u) > 0 else ""})
+                    if solved and np.linalg.norm(r_lp.u) > 0 else "",
+                    "f_inertia_cd": repr(r_cd.f_inertia) if solved else ""})
             rows.sort(key=lambda r: order[int(r["contact"])])
             write_table(table, rows, COLUMNS)
             print(f"probes {len(rows)} / {len(ks)}", flush=True)
@@ -259,6 +264,7 @@ def main(argv):
         "without_solution": sum(1 for r in rows if r["f_crit_cd"] == ""),
         "cosine": quantiles(cos), "cosine_near": quantiles(cos_near), "near_diameters": a.near,
         "norm_ratio": quantiles(ratio),
+        "f_inertia_cd": quantiles([float(r["f_inertia_cd"]) for r in exact if r["f_inertia_cd"] != ""]),
         "cosine_above_0.99": sum(1 for c in cos if c > 0.99),
         "cosine_below_0.5": sum(1 for c in cos if c < 0.5),
         "program_version": unjam.__version__,

@@ -115,11 +115,20 @@ def tearDownModule():
         shutil.rmtree(R["tmp"], ignore_errors=True)
 
 
+def inertia_F0(cd_dir):
+    """{contact: f_inertia / F0} of a cd campaign (NaN where the cell is empty or absent)."""
+    F0 = summary(cd_dir)["F0"]
+    return {k: float(r.get("f_inertia") or "nan") / F0 for k, r in probes(cd_dir).items()}
+
+
 def expected(cd_dir, lp_dir):
     """The pair's numbers recomputed from its two probes.csv (the rules of the script)."""
     cd, lp = probes(cd_dir), probes(lp_dir)
     shared = sorted(set(cd) & set(lp))
-    sol = [k for k in shared if float(cd[k]["residual"]) <= 1e-3]
+    line = summary(cd_dir)["settings"].get("max_inertia_F0", 0.0)
+    fi = inertia_F0(cd_dir)
+    sol = [k for k in shared if float(cd[k]["residual"]) <= 1e-3
+           and not (line > 0 and fi[k] > line)]
     f_cont = sum(float(cd[k]["f_cont"]) for k in sol)
     ratios = [float(cd[k]["f_crit"]) / float(lp[k]["f_crit"]) for k in sol
               if float(lp[k]["f_crit"]) > 0]
@@ -272,6 +281,65 @@ class ComparePairs(unittest.TestCase):
         e = expected(R["cd"]["p50-mu0.1"], lp)
         self.assertClose(float(row["ratio_median"]), e["ratio_median"])
 
+    def test_8_probes_above_the_campaigns_max_inertia_stay_out_of_the_means(self):
+        # The campaign's --max-inertia (settings.max_inertia_F0) drawn between the probes'
+        # f_inertia: those above it leave the means and ratios, and are counted.
+        cd_src = R["cd"]["p50-mu1"]
+        fi = inertia_F0(cd_src)
+        values = sorted(fi.values())
+        self.assertTrue(all(math.isfinite(v) and v > 0 for v in values), values)
+        line = 0.5 * (values[7] + values[8])  # 4 of the 12 above it
+        cd = copy_campaign(cd_src, "cd-inertial",
+                           edit_summary=lambda s: s["settings"].update(max_inertia_F0=line))
+        out = os.path.join(R["tmp"], "compare-inertial")
+        p = run(cd, R["lp"]["p50-mu1"], "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        e = expected(cd, R["lp"]["p50-mu1"])
+        self.assertEqual((int(row["probes"]), int(row["solved"]), int(row["inertial"])), (12, 12, 4))
+        for key in ("F_crit_over_F_cont_cd", "F_crit_over_F_cont_lp", "ratio_median", "ratio_max"):
+            self.assertClose(float(row[key]), e[key], key)
+        # Not the means over all 12: the line changed them.
+        full = read_rows(os.path.join(R["out"], "compare.csv"))[0]
+        self.assertNotEqual(row["F_crit_over_F_cont_cd"], full["F_crit_over_F_cont_cd"])
+        self.assertClose(float(row["f_inertia_median_F0"]), statistics.median(values))
+        self.assertClose(float(row["f_inertia_max_F0"]), values[-1])
+        self.assertEqual(int(row["f_inertia_max_contact"]), max(fi, key=fi.get))
+        ratios = {int(r["contact"]): r for r in read_rows(os.path.join(out, "ratios.csv"))}
+        for k, v in fi.items():
+            self.assertEqual(ratios[k]["inertial"], str(int(v > line)), k)
+            self.assertClose(float(ratios[k]["f_inertia_cd"]), v, k)
+        with open(os.path.join(out, "compare.md")) as f:
+            self.assertIn("| 12 (4 inertial) |", f.read())
+        # Without the line nobody is left out, and the f_inertia columns are the same.
+        self.assertEqual(int(full["inertial"]), 0)
+        self.assertEqual(full["f_inertia_max_F0"], row["f_inertia_max_F0"])
+
+    def test_9_campaigns_without_the_f_inertia_column(self):
+        # probes.csv of an unjam before f_inertia: the comparison still runs, the inertia
+        # columns are empty and no probe is left out, even under a max_inertia_F0.
+        def drop(rows):
+            for r in rows:
+                del r["f_inertia"]
+        cd_src = R["cd"]["p50-mu0.1"]
+        path = copy_campaign(cd_src, "cd-old", edit_summary=lambda s: s["settings"].update(
+            max_inertia_F0=1e-30))
+        with open(os.path.join(path, "probes.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        drop(rows)
+        with open(os.path.join(path, "probes.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+            w.writeheader()
+            w.writerows(rows)
+        out = os.path.join(R["tmp"], "compare-old")
+        p = run(path, R["lp"]["p50-mu0.1"], "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        self.assertEqual((row["inertial"], row["f_inertia_median_F0"], row["f_inertia_max_F0"],
+                          row["f_inertia_max_contact"]), ("0", "", "", ""))
+        full = read_rows(os.path.join(R["out"], "compare.csv"))[1]
+        self.assertEqual(row["F_crit_over_F_cont_cd"], full["F_crit_over_F_cont_cd"])
+
     def test_7_errors_write_nothing(self):
         cd1, lp1 = R["cd"]["p50-mu1"], R["lp"]["p50-mu1"]
         cd01, lp01 = R["cd"]["p50-mu0.1"], R["lp"]["p50-mu0.1"]
@@ -284,6 +352,8 @@ class ComparePairs(unittest.TestCase):
         with open(os.path.join(bad_json, "probe_summary.json"), "w") as f:
             f.write('{"method": "lp", ')
         other_mu = copy_campaign(lp1, "lp-other-mu", edit_summary=lambda s: s.update(mu=0.5))
+        bad_line = copy_campaign(cd1, "cd-bad-line", edit_summary=lambda s: s["settings"].update(
+            max_inertia_F0=-1))
 
         def renumber(rows):
             for r in rows:
@@ -305,6 +375,7 @@ class ComparePairs(unittest.TestCase):
             ([cd1, cd1], "a campaign of method 'cd', expected 'lp'"),
             ([cd1, lp01], "come from different packings"),
             ([cd1, lp1, cd1, other_mu], "come from different packings: mu 1.0 and 0.5"),
+            ([bad_line, lp1], "settings.max_inertia_F0 is not a number >= 0: -1"),
             ([cd1, other_path], "come from different packings: packing "),
             ([cd1, other_grains], "come from different packings: contact "),
             ([mixed, lp1], "rows of method 'lp' in a campaign of method 'cd'"),

@@ -49,6 +49,7 @@ def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
         u, v = a.u.ravel(), b.u.ravel()
         assert float(r["cosine"]) == pytest.approx(u @ v / np.sqrt((u @ u) * (v @ v)), abs=1e-14)
         assert float(r["norm_ratio"]) == pytest.approx(np.linalg.norm(v) / np.linalg.norm(u), rel=1e-14)
+        assert float(r["f_inertia_cd"]) == b.f_inertia and b.f_inertia > 0
         # The near field: grains within 1.5 mean diameters of the pair's midpoint (periodic).
         L = np.asarray(p.cell)[:2]
         xy = np.column_stack([p.x, p.y])
@@ -73,6 +74,7 @@ def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
     assert s["cosine"]["median"] == pytest.approx(np.median([float(r["cosine"]) for r in table
                                                               if r["exact"] == "1"]))
     assert s["mu"] == 0.1 and s["N"] == 50 and s["cd_start"] == "compliant"
+    assert s["f_inertia_cd"]["max"] == max(float(r["f_inertia_cd"]) for r in table if r["exact"] == "1")
     assert (tmp_path / "cosines.png").stat().st_size > 0 and "| 6 |" in (tmp_path / "fields.md").read_text()
     # Gathered over packings (here one): the same median, N, mu and seed in the table.
     plot = [sys.executable, str(REPO / "scripts" / "plot_field_cosines.py")]
@@ -113,6 +115,16 @@ def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
     assert "resuming: 2 contacts" in r.stdout
     again = rows(tmp_path)
     assert [x["contact"] for x in again] == ["2", "0", "1"] and again[1]["cosine"] == "0.5"
+    # A table written before the f_inertia_cd column resumes too; its rows keep the cell empty.
+    old = [{k: v for k, v in x.items() if k != "f_inertia_cd"} for x in again[1:]]
+    with open(tmp_path / "fields.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(old[0]))
+        w.writeheader()
+        w.writerows(old)
+    r = run(P50, "--contacts", 2, 0, 1, "--out", tmp_path)
+    assert "resuming: 2 contacts" in r.stdout
+    again = rows(tmp_path)
+    assert [x["f_inertia_cd"] != "" for x in again] == [True, False, False]
     # Another list or other settings: refused, the table left as it is.
     before = (tmp_path / "fields.csv").read_text()
     r = run(P50, "--contacts", 0, 1, "--out", tmp_path, ok=False)

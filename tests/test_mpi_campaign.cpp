@@ -270,6 +270,10 @@ TEST_F(Distributed, ShardsMergedKeepTheLargestInertiaOfTheirRuns) {
   const fs::path one = cd("cd-one", "");
   for (int i = 0; i < 2; ++i) cd("cd-shards", "--shard " + std::to_string(i) + "/2");
   const fs::path out = root_ / "cd-shards";
+  // The threshold is stored once, in the shard's campaign settings, where merge reads it.
+  const auto shard = nlohmann::json::parse(read_file(out / "probe_shard-0-of-2.json"));
+  EXPECT_EQ(shard.at("settings").at("max_inertia_F0").get<double>(), 1.5e-5);
+  EXPECT_FALSE(shard.at("options").contains("max_inertia"));
   const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   expect_same_probe_outputs(one, out);

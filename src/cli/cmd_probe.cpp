@@ -278,7 +278,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file) {
   const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
-                            {"options", {{"method", o.method}, {"g", o.g}, {"fit_window", o.fit_window}, {"max_inertia", o.max_inertia}}},
+                            {"options", {{"fit_window", o.fit_window}}},  // the summary's; the rest is in settings
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
                             {"wall_seconds", wall}, {"ranks", rank_loads_json<nlohmann::json>(dist.loads(), "probes")}};
   write_file_atomic(file, j.dump());
@@ -367,10 +367,13 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   ProbeOptions o;
   o.dir = dir;
   const nlohmann::json& first = shards.front();
-  o.method = first.at("options").at("method").get<std::string>();
-  o.g = first.at("options").at("g").get<double>();
+  // The method, g and --max-inertia as the shards' campaign settings record them (to_json of
+  // CampaignSettings, probe/probe_campaign; max_inertia_F0 is there only where it was set).
+  const nlohmann::json& settings = first.at("settings");
+  o.method = settings.at("method").get<std::string>();
+  o.g = settings.at("g").get<double>();
+  o.max_inertia = settings.value("max_inertia_F0", 0.0);
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
-  o.max_inertia = first.at("options").value("max_inertia", 0.0);  // absent: shards of an earlier unjam
   CampaignState state = empty_campaign_state(p);
   std::vector<RankLoad> loads;
   double wall = 0.0;
