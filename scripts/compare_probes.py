@@ -155,6 +155,11 @@ def read_campaign(directory, method):
         bad = sorted(set(m for m in t["method"] if m != method))
         raise UserError(f"{ppath}: rows of method {', '.join(repr(m) for m in bad)} in a "
                         f"campaign of method {method!r}")
+    partial = summary.get("partial")
+    if isinstance(partial, dict):
+        warn(f"{directory}: a partial campaign ({partial.get('probes_done')} of "
+             f"{partial.get('probes_planned')} probes, written by `unjam probe --partial` from "
+             f"its checkpoint)")
     contact = _integer_column(t, "contact", ppath)
     a = _integer_column(t, "a", ppath)
     b = _integer_column(t, "b", ppath)
@@ -419,8 +424,11 @@ def markdown(pairs, campaigns, command):
             f"contacts; inertial: solved contacts above the cd campaign's --max-inertia, left "
             f"out of the means and ratios as the campaign leaves them out.", ""]
     for i, (p, (cd, lp)) in enumerate(zip(pairs, zip(campaigns[::2], campaigns[1::2])), 1):
+        part = [f"{c['summary']['partial'].get('probes_done')} of "
+                f"{c['summary']['partial'].get('probes_planned')} probes of the {m} campaign so far"
+                for m, c in (("cd", cd), ("lp", lp)) if isinstance(c["summary"].get("partial"), dict)]
         out.append(f"{i}. {pair_name(p)}: packing `{p['packing']}`, cd `{cd['dir']}`, "
-                   f"lp `{lp['dir']}`")
+                   f"lp `{lp['dir']}`" + (f" (partial: {'; '.join(part)})" if part else ""))
     return "\n".join(out) + "\n"
 
 

@@ -190,6 +190,61 @@ TEST_F(CliProbe, MaxInertiaLeavesProbesOutOfTheAveragesOnly) {
   EXPECT_EQ(c["probes"].get<int>(), 4);
 }
 
+TEST_F(CliProbe, PartialWritesTheOutputsOfTheCheckpointAndLeavesTheCampaignToResume) {
+  // A campaign stopped after 3 of 6 probes: --partial DIR writes the outputs of those 3 to DIR
+  // (its summary says 3 of 6), probes nothing and changes nothing of the campaign, which then
+  // resumes to the bytes of an uninterrupted run.
+  const fs::path out = root_ / "campaign", part = root_ / "so-far", whole = root_ / "whole";
+  for (const fs::path& d : {out, whole}) fs::create_directories(d);
+  const std::string args = " --sample 6 --method lp --quiet --threads 1 --out ";
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(out) + " --stop-after 3");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  const std::string checkpoint = read_file(out / "probe_checkpoint.json");
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --partial " + q(part));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 of 6 probes of"), std::string::npos) << r.output;
+  EXPECT_EQ(read_file(out / "probe_checkpoint.json"), checkpoint);
+  EXPECT_FALSE(fs::exists(out / "probes.csv"));
+  const nlohmann::json s = read_json_file(part / "probe_summary.json");
+  EXPECT_EQ(s["partial"]["probes_done"].get<int>(), 3);
+  EXPECT_EQ(s["partial"]["probes_planned"].get<int>(), 6);
+  EXPECT_TRUE(s["wall_seconds"].is_null());
+  EXPECT_EQ(s["probes"].get<int>(), 3);
+  const CsvTable t = CsvTable::read(part / "probes.csv");
+  ASSERT_EQ(t.rows(), 3u);
+  double f_cont = 0.0, f_crit = 0.0;
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    f_cont += t.number(i, t.column("f_cont"));
+    f_crit += t.number(i, t.column("f_crit"));
+  }
+  EXPECT_NEAR(s["F_crit_over_F_cont"].get<double>(), f_crit / f_cont, 1e-12);
+
+  // Refused: the campaign's own directory, a single contact, other settings, no checkpoint.
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --partial " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("is the campaign's output directory"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + " --contact 1 --partial " + q(part));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--partial goes with --all or --sample"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + " --sample 6 --method lp --g 1e-8 --out " + q(out) + " --partial " + q(part));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("other settings"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(whole) + " --partial " + q(part));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no checkpoint of this campaign"), std::string::npos) << r.output;
+  EXPECT_EQ(read_file(out / "probe_checkpoint.json"), checkpoint);
+
+  // The campaign resumes and finishes as if never read; its first 3 rows are the partial's.
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(out)).exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(whole)).exit_code, 0);
+  EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
+  EXPECT_FALSE(read_json_file(out / "probe_summary.json").contains("partial"));
+  const CsvTable all = CsvTable::read(out / "probes.csv");
+  std::set<std::int64_t> finished;
+  for (std::size_t i = 0; i < all.rows(); ++i) finished.insert(all.integer(i, all.column("contact")));
+  for (std::size_t i = 0; i < t.rows(); ++i) EXPECT_EQ(finished.count(t.integer(i, t.column("contact"))), 1u);
+}
+
 TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   // A cd campaign stopped at dt = 1e-3 (exit 3) is not resumed at the default dt: the error
   // names the setting and both values, the checkpoint is kept, and the same command with

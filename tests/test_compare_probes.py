@@ -340,6 +340,20 @@ class ComparePairs(unittest.TestCase):
         full = read_rows(os.path.join(R["out"], "compare.csv"))[1]
         self.assertEqual(row["F_crit_over_F_cont_cd"], full["F_crit_over_F_cont_cd"])
 
+    def test_10_a_partial_campaign_is_named(self):
+        # Outputs of `unjam probe --partial` (probe_summary.json's `partial`): compared as any
+        # campaign, with a warning and a note in compare.md.
+        cd = copy_campaign(R["cd"]["p50-mu1"], "cd-partial", edit_summary=lambda s: s.update(
+            partial={"probes_done": 12, "probes_planned": 40}))
+        out = os.path.join(R["tmp"], "compare-partial")
+        p = run(cd, R["lp"]["p50-mu1"], "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn(f"{cd}: a partial campaign (12 of 40 probes", p.stderr)
+        with open(os.path.join(out, "compare.md")) as f:
+            self.assertIn("(partial: 12 of 40 probes of the cd campaign so far)", f.read())
+        self.assertEqual(read_rows(os.path.join(out, "compare.csv"))[0]["F_crit_over_F_cont_cd"],
+                         R["compare"][0]["F_crit_over_F_cont_cd"])
+
     def test_7_errors_write_nothing(self):
         cd1, lp1 = R["cd"]["p50-mu1"], R["lp"]["p50-mu1"]
         cd01, lp01 = R["cd"]["p50-mu0.1"], R["lp"]["p50-mu0.1"]

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "cli/commands.hpp"
@@ -50,6 +51,7 @@ struct ProbeOptions {
   bool quiet = false;
   std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
   int stop_after = 0;              // > 0: stop (checkpoint saved) after this many new probes
+  std::string partial;             // --partial DIR: the outputs of the checkpoint's probes, to DIR
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -199,7 +201,7 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
 
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
                      const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
-                     const fs::path& out);
+                     const fs::path& out, int planned = 0);
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file);
 
@@ -235,6 +237,28 @@ std::function<void(int, int, double, double)> progress_printer(const ProbeOption
   };
 }
 
+// --partial DIR: the outputs of the probes the campaign's checkpoint holds (a campaign still
+// running, or stopped), written to DIR as a finished campaign writes them, with
+// probe_summary.json's `partial` saying how many of how many. Reads the checkpoint only: the
+// campaign itself, running or not, is left as it is, and resumes as before.
+void write_partial(const ProbeOptions& o, const Packing& p, const CheckpointedCampaignOptions& run, int total,
+                   const fs::path& out) {
+  const fs::path dir = o.partial;
+  if (launched_by_mpi()) throw Error("--partial reads a checkpoint: run it as one process, not under mpirun");
+  std::error_code ec;
+  if (fs::exists(dir) && fs::equivalent(dir, out, ec))
+    throw Error("--partial " + o.partial + " is the campaign's output directory; give another directory "
+                "(the campaign writes its own outputs there when it finishes)");
+  if (!fs::exists(run.checkpoint))
+    throw Error("no checkpoint of this campaign in " + out.string() + " (" + run.checkpoint.filename().string() +
+                "): it has not started, or it has finished and written its outputs there");
+  const std::optional<CampaignState> state =
+      read_campaign_checkpoint(read_file(run.checkpoint), run.checkpoint.string(), p, run.settings);
+  if (!state) throw Error(run.checkpoint.string() + " was saved from another packing than " + o.dir);
+  const DirLock lock(dir, command_line());
+  finish_campaign(o, p, run.settings, *state, 0.0, {}, dir, total);
+}
+
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   fit_window(o);  // refuse a bad window before any probe runs
   const int total = static_cast<int>(campaign_targets(p, s).size());
@@ -242,14 +266,16 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     throw Error(o.dir + " has no force-carrying contact (fn > " + nlohmann::json(s.force_threshold).dump() +
                 " F0): nothing to probe");
   const auto [shard, shards] = o.shard.empty() ? std::pair{0, 1} : parse_shard(o.shard);
-  const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
-  if (!dist->gathers()) return run_worker(p, s, *dist);
-  const auto lock = lock_output(out, shard, shards);
   const std::string part = shards > 1 ? "-shard-" + std::to_string(shard) + "-of-" + std::to_string(shards) : "";
   CheckpointedCampaignOptions run;
   run.checkpoint = out / ("probe_checkpoint" + part + ".json");
   run.settings = to_json(s);
   run.fingerprint = packing_fingerprint(p);
+  // A shard probes the targets t with t mod K = i (campaign/distributor.hpp).
+  if (!o.partial.empty()) return write_partial(o, p, run, (total - shard + shards - 1) / shards, out);
+  const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
+  if (!dist->gathers()) return run_worker(p, s, *dist);
+  const auto lock = lock_output(out, shard, shards);
   run.checkpoint_s = o.checkpoint_s;
   run.stop_after = o.stop_after;
   run.interrupted = InterruptGuard::requested;
@@ -288,9 +314,11 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
 }
 
 // probes.csv, response_field.csv, response_profile.csv, probe_summary.json and the report.
+// planned > 0: the outputs of a campaign's checkpoint (--partial), which has not probed all
+// `planned` contacts yet; its wall time and ranks are unknown (null, []).
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
                      const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
-                     const fs::path& out) {
+                     const fs::path& out, int planned) {
   const CampaignSummary sum = summarize(p, state, fit_window(o), o.max_inertia);
   const PackingStats stats = compute_packing_stats(p);
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
@@ -303,12 +331,17 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   summary["settings"] = settings_json;
   summary["method"] = o.method;
   summary["g"] = o.g;
-  summary["wall_seconds"] = wall;
+  summary["wall_seconds"] = planned > 0 ? nlohmann::json(nullptr) : nlohmann::json(wall);
   summary["ranks"] = rank_loads_json<nlohmann::json>(loads, "probes");
+  if (planned > 0) summary["partial"] = {{"probes_done", sum.probes}, {"probes_planned", planned}};
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
 
-  std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(),
-              o.method.c_str(), format_duration(wall).c_str(), out.c_str());
+  if (planned > 0)
+    std::printf("%d of %d probes of %s (method %s) so far, from the campaign's checkpoint -> %s (partial)\n",
+                sum.probes, planned, o.dir.c_str(), o.method.c_str(), out.c_str());
+  else
+    std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(), o.method.c_str(),
+                format_duration(wall).c_str(), out.c_str());
   std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.contact.mu, stats.phi,
               stats.z, sum.F_cont_over_F0);
   std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d", sum.F_crit_over_F_cont, sum.not_converged);
@@ -340,6 +373,7 @@ void run(const ProbeOptions& o) {
   const int modes = (o.contact >= 0) + o.all + (o.sample > 0);
   if (modes != 1) throw Error("give exactly one of --contact K, --all, --sample K");
   if (!o.export_problem.empty() && o.contact < 0) throw Error("--export-problem goes with --contact K");
+  if (!o.partial.empty() && o.contact >= 0) throw Error("--partial goes with --all or --sample K (a campaign)");
   const Packing p = read_packing(o.dir);
   if (!p.state.is_static)
     std::fprintf(stderr, "warning: %s is not marked static (its compaction did not finish)\n", o.dir.c_str());
@@ -454,6 +488,10 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--stop-after", o->stop_after,
                   "stop after this many new probes, saving the checkpoint (as Ctrl-C; rerun to resume)")
       ->check(non_negative_number());
+  cmd->add_option("--partial", o->partial,
+                  "with --all / --sample: write the outputs of the probes the campaign has finished so far "
+                  "(its checkpoint in --out, while it runs or after it stopped) to this other directory, "
+                  "probing nothing; probe_summary.json records them as partial");
   cmd->callback([o] { run(*o); });
 }
 
