@@ -18,6 +18,7 @@
 #include "unjam/probe/cd_path.hpp"
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
+#include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam {
 namespace {
@@ -336,6 +337,46 @@ TEST(CdPath, TheBranchFromTheStaticNetworkCanCloseOnItself) {
   EXPECT_LE(c82.residual.max(), kExactStepTolerance);
 }
 
+TEST(CdPath, SofterStartsSolveWhereTheFirstStartsContinuationFindsNone) {
+  // The 100-disk frozen structure at mu = 1 (fixture p100-frozen-mu1), contact 68, at the
+  // quasi-static step: the continuation from compliance 0.1 and its restarts find no solution
+  // (docs/probe.md, "Where the path starts"); followed again from compliance 1 it is exact.
+  const Packing& p = fixture("p100-frozen-mu1");
+  ProbeSettings qs;
+  qs.dt = default_probe_dt(ProbeMethod::kCd, qs.g);
+  CdPathSettings one;
+  one.start = CdPathStart::compliant;
+  one.softer_starts = 0;
+  CdPathStats first;
+  const CdStepSolution none = probe_cd_path(p, 68, qs, one, &first);
+  EXPECT_EQ(none.f.size(), 0);
+  for (const CdPathAttempt& a : first.paths) EXPECT_LE(a.compliance, 0.1);
+  CdPathSettings softer;
+  softer.start = CdPathStart::compliant;
+  ASSERT_EQ(softer.softer_starts, 2);  // the default
+  CdPathStats stats;
+  const CdStepSolution s = probe_cd_path(p, 68, qs, softer, &stats);
+  ASSERT_GT(s.f.size(), 0);
+  EXPECT_LE(s.residual.max(), kExactStepTolerance);
+  EXPECT_EQ(stats.failure, "");
+  EXPECT_EQ(stats.paths.back().compliance, 1.0);  // the first softer start, exact: no third
+  EXPECT_EQ(stats.paths.back().residual, s.residual.max());
+  EXPECT_NEAR(s.result.f_crit / p.force_unit(), 5.8737, 1e-3);
+  // The first start's restarts end after two in a row stop short of the full opening at the
+  // same lambda_max / compliance (the path scaled), where every restart was followed before.
+  const std::size_t at_first = stats.paths.size() - 1;
+  ASSERT_GE(at_first, 3u);
+  const CdPathAttempt &a = stats.paths[at_first - 2], &b = stats.paths[at_first - 1];
+  ASSERT_LT(a.lambda_max, 1.0);
+  ASSERT_LT(b.lambda_max, 1.0);
+  EXPECT_NEAR((b.lambda_max / b.compliance) / (a.lambda_max / a.compliance), 1.0, 0.01);
+  EXPECT_LT(at_first, first.paths.size());
+  for (std::size_t i = 0; i < at_first; ++i) {
+    EXPECT_EQ(stats.paths[i].compliance, first.paths[i].compliance) << i;
+    EXPECT_EQ(stats.paths[i].pieces, first.paths[i].pieces) << i;
+  }
+}
+
 TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   // p200-mu1, contact 14: lowered from compliance 0.1, the soft solution's branch turns back
   // in the compliance at ~0.012 (the proximal paths there close on themselves) and the
@@ -345,6 +386,7 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   CdPathSettings once;
   once.start = CdPathStart::compliant;
   once.max_restarts = 0;
+  once.softer_starts = 0;  // one path: no restart, no softer start
   CdPathStats stopped;
   const CdStepSolution none = probe_cd_path(p, 14, ProbeSettings{}, once, &stopped);
   EXPECT_EQ(none.f.size(), 0);

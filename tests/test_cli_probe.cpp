@@ -290,7 +290,9 @@ TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutio
   const nlohmann::json js = read_json_file(soft / "probe_summary.json");
   const nlohmann::json jr = read_json_file(rigid / "probe_summary.json");
   EXPECT_EQ(js["settings"]["cd_start"], "compliant");
+  EXPECT_EQ(js["settings"]["cd_softer_starts"], 2);  // recorded where it applies
   EXPECT_FALSE(jr["settings"].contains("cd_start"));
+  EXPECT_FALSE(jr["settings"].contains("cd_softer_starts"));
   EXPECT_EQ(js["not_converged"].get<int>(), 0);
 }
 

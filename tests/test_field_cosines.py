@@ -35,6 +35,14 @@ def rows(out):
         return list(csv.DictReader(f))
 
 
+def write_rows(out, table):
+    """fields.csv of out rewritten with these rows (their own columns)."""
+    with open(out / "fields.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(table[0]))
+        w.writeheader()
+        w.writerows(table)
+
+
 def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
     ks = [0, 1, 2, 3, 5, 8]
     run(P50, "--contacts", *ks, "--threads", 1, "--chunk", 4, "--near", 1.5, "--out", tmp_path)
@@ -107,20 +115,13 @@ def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
     run(P50, "--contacts", 0, 1, "--out", tmp_path)
     table = rows(tmp_path)
     table[0]["cosine"] = "0.5"  # a marker: the second run must not probe contact 0 again
-    with open(tmp_path / "fields.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(table[0]))
-        w.writeheader()
-        w.writerows(table)
+    write_rows(tmp_path, table)
     r = run(P50, "--contacts", 2, 0, 1, "--out", tmp_path)
     assert "resuming: 2 contacts" in r.stdout
     again = rows(tmp_path)
     assert [x["contact"] for x in again] == ["2", "0", "1"] and again[1]["cosine"] == "0.5"
     # A table written before the f_inertia_cd column resumes too; its rows keep the cell empty.
-    old = [{k: v for k, v in x.items() if k != "f_inertia_cd"} for x in again[1:]]
-    with open(tmp_path / "fields.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(old[0]))
-        w.writeheader()
-        w.writerows(old)
+    write_rows(tmp_path, [{k: v for k, v in x.items() if k != "f_inertia_cd"} for x in again[1:]])
     r = run(P50, "--contacts", 2, 0, 1, "--out", tmp_path)
     assert "resuming: 2 contacts" in r.stdout
     again = rows(tmp_path)

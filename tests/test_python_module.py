@@ -149,7 +149,8 @@ def signature_defaults(function):
                           "tol": "tol", "max-sweeps": "max_sweeps", "static-tol": "static_tol",
                           "max-steps": "max_steps"}),
     ("probe", unjam.probe, {"method": "method", "g": "g", "velocity-tol": "velocity_tol",
-                            "max-sweeps": "max_sweeps", "cd-start": "cd_start"}),
+                            "max-sweeps": "max_sweeps", "cd-start": "cd_start",
+                            "cd-softer-starts": "cd_softer_starts"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])

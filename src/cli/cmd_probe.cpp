@@ -52,6 +52,7 @@ struct ProbeOptions {
   std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
   int stop_after = 0;              // > 0: stop (checkpoint saved) after this many new probes
   std::string partial;             // --partial DIR: the outputs of the checkpoint's probes, to DIR
+  int softer_starts = CdPathSettings{}.softer_starts;
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -61,6 +62,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
     throw Error("--displacement must be peculiar or total");
   s.method = method_from_name(o.method);
   s.cd.start = cd_start_from_name(o.cd_start);
+  s.cd.softer_starts = o.softer_starts;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -113,6 +115,29 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
 // Why the cd path found no solution, where it knows (stats of its first attempt).
 std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
   const std::string why_fails = "; docs/probe.md, \"Why a path fails\"";
+  if (start == CdPathStart::compliant && !stats.paths.empty()) {
+    // The continuation: either every path from the static network stopped short of the full
+    // opening, or a lowering stopped at a fold and the restarts below it found nothing better.
+    const CdPathAttempt& last = stats.paths.back();
+    bool none_opened = true;
+    for (const CdPathAttempt& a : stats.paths) none_opened = none_opened && a.lambda_max < 1.0;
+    char buf[160];
+    if (none_opened) {
+      std::snprintf(buf, sizeof buf, "%.3g of the opening at compliance %.3g", last.lambda_max, last.compliance);
+      return std::string("every path from the static network closes on itself or cycles before the full opening, "
+                         "at an opening in proportion to its compliance (") + buf +
+             "): no solution is connected to the static network at any stiffness tried" + why_fails;
+    }
+    double stopped = 0.0;  // where the first lowering stopped: the continuation's fold
+    for (const CdPathAttempt& a : stats.paths)
+      if (stopped == 0.0 && a.compliance_end > 0.0) stopped = a.compliance_end;
+    if (stopped > 0.0) {
+      std::snprintf(buf, sizeof buf, "%.3g", stopped);
+      return std::string("the compliance's lowering stopped at ") + buf +
+             " (the branch of soft solutions turns back there), and the paths restarted below it found no "
+             "exact solution; docs/probe.md, \"Where the path starts\"";
+    }
+  }
   if (stats.failure == "loop" && stats.lambda_max < 1.0) {
     char turn[32];
     std::snprintf(turn, sizeof turn, "%.3g", stats.lambda_max);
@@ -456,6 +481,13 @@ void add_probe_command(CLI::App& app) {
                   "at a soft compliance, lowered to the rigid step: the rigid limit of stiff contacts; fast, but at 500 "
                   "disks another solution than static's; docs/probe.md, \"Where the path starts\")")
       ->capture_default_str();
+  cmd->add_option(
+      "--cd-softer-starts", o->softer_starts,
+      "cd, compliant start: where the continuation ends without an exact solution, follow it again from 10x "
+      "and then 100x ... its starting compliance, this many times (0: one start; docs/probe.md, \"Where the path "
+      "starts\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");

@@ -834,6 +834,10 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, co
   return guess;
 }
 
+// Two restarts of the continuation whose lambda_max / compliance agree within this (relative)
+// are one path scaled (probe_cd_path).
+constexpr double kScaledRestartTolerance = 0.01;
+
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
@@ -856,32 +860,53 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     throw Error("cd path: restart_divisor must be > 1 (got " + std::to_string(ps.restart_divisor) + ")");
   if (soft && ps.lowering_retries < 0)
     throw Error("cd path: lowering_retries must be >= 0 (got " + std::to_string(ps.lowering_retries) + ")");
+  if (soft && ps.softer_starts < 0)
+    throw Error("cd path: softer_starts must be >= 0 (got " + std::to_string(ps.softer_starts) + ")");
+  if (soft && ps.softer_starts > 0 && !(ps.softer_factor > 1.0))
+    throw Error("cd path: softer_factor must be > 1 (got " + std::to_string(ps.softer_factor) + ")");
   CdStepSolution best;
   CdPathStats best_stats;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : 3;
-  double start = ps.compliant_start;  // soft: the compliance of the next path from the static network
+  // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
+  // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
+  // path starts").
+  const int starts = soft && ps.retry ? 1 + ps.softer_starts : 1;
   std::vector<CdPathAttempt> paths;
-  for (int attempt = 0; attempt < attempts; ++attempt) {
-    if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)))) break;
-    CdPathStats stats;
-    CdPathSettings at = ps;
-    if (!soft) at.compliance = compliances[attempt];
-    const double path_compliance = soft ? start : at.compliance;
-    CdStepSolution sol = follow(pb, packing, at, guess, path_compliance, at.compliance, stats, settings.cancel);
-    paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
-                     sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                     stats.failure});
-    // restart_divisor below where this lowering stopped (or this path's start, where it failed),
-    // never below the rigid compliance itself: a path there is the static start's.
-    if (soft)
-      start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / ps.restart_divisor, ps.compliance);
-    const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
-    if (better || paths.size() == 1) {
-      best = std::move(sol);
-      best_stats = stats;
+  const auto exact = [&] { return best.f.size() > 0 && best.residual.max() <= kExactStepTolerance; };
+  for (int from = 0; from < starts && !exact(); ++from) {
+    double start = ps.compliant_start * std::pow(ps.softer_factor, from);  // soft: the next path's compliance
+    double scaled = 0.0;  // lambda_max / compliance of the last restart that stopped short of lambda = 1
+    for (int attempt = 0; attempt < attempts; ++attempt) {
+      if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)))) break;
+      CdPathStats stats;
+      CdPathSettings at = ps;
+      if (!soft) at.compliance = compliances[attempt];
+      const double path_compliance = soft ? start : at.compliance;
+      CdStepSolution sol = follow(pb, packing, at, guess, path_compliance, at.compliance, stats, settings.cancel);
+      paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
+                       sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
+                       stats.failure});
+      // restart_divisor below where this lowering stopped (or this path's start, where it failed),
+      // never below the rigid compliance itself: a path there is the static start's.
+      if (soft)
+        start = std::max((stats.compliance_end > 0.0 ? stats.compliance_end : start) / ps.restart_divisor, ps.compliance);
+      const bool better = sol.f.size() > 0 && (best.f.size() == 0 || sol.residual.max() < best.residual.max());
+      if (better || paths.size() == 1) {
+        best = std::move(sol);
+        best_stats = stats;
+      }
+      if (exact()) break;
+      // Where the static network sticks, a restart's path is the one before it scaled: it
+      // stops at lambda_max proportional to its compliance (forces ~ lambda / compliance; docs/
+      // probe.md, "Where the path starts"). Two restarts in a row so, and the ones below would
+      // repeat them: the next starting compliance is tried instead.
+      if (soft && ps.softer_starts > 0 && attempt > 0) {
+        const double ratio = stats.lambda_max < 1.0 ? stats.lambda_max / path_compliance : 0.0;
+        if (ratio > 0.0 && scaled > 0.0 && std::abs(ratio / scaled - 1.0) <= kScaledRestartTolerance) break;
+        scaled = ratio;
+      }
     }
-    if (best.f.size() > 0 && best.residual.max() <= kExactStepTolerance) break;
   }
   best_stats.paths = std::move(paths);
   best_stats.attempts = int(best_stats.paths.size());

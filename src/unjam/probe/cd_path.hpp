@@ -73,6 +73,14 @@ struct CdPathSettings {
   int lowering_retries = 4;
   double restart_divisor = 10.0;
   int max_restarts = 6;
+  // CdPathStart::compliant: where the continuation from compliant_start (with its restarts)
+  // ends without an exact solution, it is followed again from softer_factor times that
+  // compliance, up to softer_starts times (the lowest residual over all paths is kept), and
+  // a start's restarts end once two in a row stop short of the full opening at the same
+  // lambda_max / compliance (the ones below would repeat them scaled). 0: one start, and
+  // every restart followed; none without `retry` (docs/probe.md, "Where the path starts").
+  int softer_starts = 2;
+  double softer_factor = 10.0;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -98,7 +106,8 @@ struct CdPathStats {
   double lambda_max = 0.0;    // the largest lambda the first path reached (1: its end)
   double compliance_end = 0.0;  // compliant: the compliance (as `compliance`) where the
                                 // lowering of the returned attempt stopped; 0 if it did not
-  int restarts = 0;           // compliant: paths followed afresh below where a lowering stopped
+  int restarts = 0;           // compliant: paths followed after the first (restarts below where a
+                              // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual)

@@ -179,6 +179,11 @@ void validate(const CampaignSettings& s) {
     throw Error("the largest inertia of a probe that enters the averages must be >= 0 and finite (in F0)");
   if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
     throw Error("a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp");
+  if (s.cd.softer_starts < 0)
+    throw Error("--cd-softer-starts must be >= 0 (got " + std::to_string(s.cd.softer_starts) + ")");
+  if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
+      !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
+    throw Error("--cd-softer-starts applies to the cd method's compliant start only");
   if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
     throw Error(std::string("the cd start '") + cd_start_name(s.cd.start) + "' applies to the cd method only (the method is " +
                 method_name(s.method) + ")");
@@ -346,6 +351,9 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // recorded where it is not the default, so that earlier checkpoints still resume
     if (s.method == ProbeMethod::kCd && s.cd.start != CdPathStart::static_network)
       j["cd_start"] = cd_start_name(s.cd.start);
+    // Recorded where they apply and are on (0 is the continuation's single start).
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant && s.cd.softer_starts > 0)
+      j["cd_softer_starts"] = s.cd.softer_starts;
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
       j["velocity_tol"] = s.nlgs.velocity_tol;
