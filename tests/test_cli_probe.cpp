@@ -297,6 +297,25 @@ TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutio
 }
 
 }  // namespace
+TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
+  // Contact 73 of the frozen 100-disk structure at mu = 1, quasi-static, one starting
+  // compliance: the lowering from 0.1 stops at a fold at 0.012 and no restart is exact. The
+  // probe says so, names the compliance and lists every path (docs/probe.md, "Where the path
+  // starts"), and exits 1.
+  const fs::path frozen = fs::path(UNJAM_FIXTURES_DIR) / "p100-frozen-mu1";
+  const fs::path out = root_ / "fold";
+  fs::create_directories(out);
+  const testing::ToolRun r = run_tool("probe " + q(frozen) + " --contact 73 --method cd --cd-start compliant "
+                                      "--cd-softer-starts 0 --threads 1 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("the compliance's lowering stopped at 0.012 (the branch of soft solutions turns back "
+                          "there), and the other paths listed below found no exact solution"),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 0.1: full opening; 8 lowerings, stopped at compliance 0.012"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("--cd-start compliant takes"), std::string::npos) << r.output;  // it is the start
+}
+
 TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {
   // Contact 49 of p200-mu1 at dt = 1e-3: the branch of the step through the static network
   // turns back at ~2.3e-5 of the opening and closes on itself, at every compliance tried

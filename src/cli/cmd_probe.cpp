@@ -134,7 +134,7 @@ std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
     if (stopped > 0.0) {
       std::snprintf(buf, sizeof buf, "%.3g", stopped);
       return std::string("the compliance's lowering stopped at ") + buf +
-             " (the branch of soft solutions turns back there), and the paths restarted below it found no "
+             " (the branch of soft solutions turns back there), and the other paths listed below found no "
              "exact solution; docs/probe.md, \"Where the path starts\"";
     }
   }
@@ -266,22 +266,22 @@ std::function<void(int, int, double, double)> progress_printer(const ProbeOption
 // running, or stopped), written to DIR as a finished campaign writes them, with
 // probe_summary.json's `partial` saying how many of how many. Reads the checkpoint only: the
 // campaign itself, running or not, is left as it is, and resumes as before.
-void write_partial(const ProbeOptions& o, const Packing& p, const CheckpointedCampaignOptions& run, int total,
-                   const fs::path& out) {
+void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& checkpoint,
+                   const nlohmann::json& settings, int planned, const fs::path& out) {
   const fs::path dir = o.partial;
   if (launched_by_mpi()) throw Error("--partial reads a checkpoint: run it as one process, not under mpirun");
   std::error_code ec;
   if (fs::exists(dir) && fs::equivalent(dir, out, ec))
     throw Error("--partial " + o.partial + " is the campaign's output directory; give another directory "
                 "(the campaign writes its own outputs there when it finishes)");
-  if (!fs::exists(run.checkpoint))
-    throw Error("no checkpoint of this campaign in " + out.string() + " (" + run.checkpoint.filename().string() +
+  if (!fs::exists(checkpoint))
+    throw Error("no checkpoint of this campaign in " + out.string() + " (" + checkpoint.filename().string() +
                 "): it has not started, or it has finished and written its outputs there");
   const std::optional<CampaignState> state =
-      read_campaign_checkpoint(read_file(run.checkpoint), run.checkpoint.string(), p, run.settings);
-  if (!state) throw Error(run.checkpoint.string() + " was saved from another packing than " + o.dir);
+      read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings);
+  if (!state) throw Error(checkpoint.string() + " was saved from another packing than " + o.dir);
   const DirLock lock(dir, command_line());
-  finish_campaign(o, p, run.settings, *state, 0.0, {}, dir, total);
+  finish_campaign(o, p, settings, *state, 0.0, {}, dir, planned);
 }
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
@@ -297,7 +297,8 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   run.settings = to_json(s);
   run.fingerprint = packing_fingerprint(p);
   // A shard probes the targets t with t mod K = i (campaign/distributor.hpp).
-  if (!o.partial.empty()) return write_partial(o, p, run, (total - shard + shards - 1) / shards, out);
+  if (!o.partial.empty())
+    return write_partial(o, p, run.checkpoint, run.settings, (total - shard + shards - 1) / shards, out);
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
   if (!dist->gathers()) return run_worker(p, s, *dist);
   const auto lock = lock_output(out, shard, shards);
