@@ -155,11 +155,10 @@ def read_campaign(directory, method):
         bad = sorted(set(m for m in t["method"] if m != method))
         raise UserError(f"{ppath}: rows of method {', '.join(repr(m) for m in bad)} in a "
                         f"campaign of method {method!r}")
-    partial = summary.get("partial")
-    if isinstance(partial, dict):
-        warn(f"{directory}: a partial campaign ({partial.get('probes_done')} of "
-             f"{partial.get('probes_planned')} probes, written by `unjam probe --partial` from "
-             f"its checkpoint)")
+    partial = partial_count(summary)
+    if partial:
+        warn(f"{directory}: a partial campaign ({partial}, written by `unjam probe --partial` "
+             f"from its checkpoint)")
     contact = _integer_column(t, "contact", ppath)
     a = _integer_column(t, "a", ppath)
     b = _integer_column(t, "b", ppath)
@@ -175,6 +174,14 @@ def read_campaign(directory, method):
                    "f_crit": float(t["f_crit"][i]), "sweeps": sweeps[i],
                    "residual": float(t["residual"][i]), "f_inertia": float(f_inertia[i])}
     return {"dir": directory, "summary": summary, "summary_path": spath, "rows": rows}
+
+
+def partial_count(summary):
+    """'N of M probes' of a campaign written by `unjam probe --partial`, None for a finished one."""
+    partial = summary.get("partial")
+    if not isinstance(partial, dict):
+        return None
+    return f"{partial.get('probes_done')} of {partial.get('probes_planned')} probes"
 
 
 def max_inertia_F0(campaign):
@@ -294,6 +301,7 @@ def compare_pair(cd, lp, label):
         q1, _, q3 = statistics.quantiles(ratios, n=4)
     else:
         q1 = q3 = ratios[0] if ratios else math.nan
+    largest = max(inertia) if inertia else (math.nan, None)  # (f_inertia / F0, contact)
     ranks = s_cd.get("ranks")
     busy = math.nan
     if isinstance(ranks, list) and ranks and all(
@@ -320,8 +328,8 @@ def compare_pair(cd, lp, label):
         "cpu_s_per_probe_cd": busy / probes_cd,
         "inertial": n_inertial,
         "f_inertia_median_F0": statistics.median(v for v, _ in inertia) if inertia else math.nan,
-        "f_inertia_max_F0": max(inertia)[0] if inertia else math.nan,
-        "f_inertia_max_contact": max(inertia)[1] if inertia else None,
+        "f_inertia_max_F0": largest[0],
+        "f_inertia_max_contact": largest[1],
     }
     return numbers, rows, ratios
 
@@ -424,9 +432,8 @@ def markdown(pairs, campaigns, command):
             f"contacts; inertial: solved contacts above the cd campaign's --max-inertia, left "
             f"out of the means and ratios as the campaign leaves them out.", ""]
     for i, (p, (cd, lp)) in enumerate(zip(pairs, zip(campaigns[::2], campaigns[1::2])), 1):
-        part = [f"{c['summary']['partial'].get('probes_done')} of "
-                f"{c['summary']['partial'].get('probes_planned')} probes of the {m} campaign so far"
-                for m, c in (("cd", cd), ("lp", lp)) if isinstance(c["summary"].get("partial"), dict)]
+        part = [f"{partial_count(c['summary'])} of the {m} campaign so far"
+                for m, c in (("cd", cd), ("lp", lp)) if partial_count(c["summary"])]
         out.append(f"{i}. {pair_name(p)}: packing `{p['packing']}`, cd `{cd['dir']}`, "
                    f"lp `{lp['dir']}`" + (f" (partial: {'; '.join(part)})" if part else ""))
     return "\n".join(out) + "\n"

@@ -5,6 +5,7 @@
 // probe_summary.json.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -243,6 +244,24 @@ TEST_F(CliProbe, PartialWritesTheOutputsOfTheCheckpointAndLeavesTheCampaignToRes
   std::set<std::int64_t> finished;
   for (std::size_t i = 0; i < all.rows(); ++i) finished.insert(all.integer(i, all.column("contact")));
   for (std::size_t i = 0; i < t.rows(); ++i) EXPECT_EQ(finished.count(t.integer(i, t.column("contact"))), 1u);
+
+  // A shard's checkpoint: planned are the sample's contacts k with k mod 3 = i, as the shard
+  // probes them (the shard i with the most of them, at least 2 of the 6: one probe leaves it
+  // unfinished).
+  int counts[3] = {0, 0, 0};
+  for (const std::int64_t k : finished) ++counts[k % 3];
+  const int i = static_cast<int>(std::max_element(counts, counts + 3) - counts);
+  const std::string shard = " --shard " + std::to_string(i) + "/3";
+  const fs::path sharded = root_ / "sharded", shard_part = root_ / "shard-so-far";
+  fs::create_directories(sharded);
+  r = run_tool("probe " + q(dir_) + args + q(sharded) + shard + " --stop-after 1");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(sharded) + shard + " --partial " + q(shard_part));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const int in_shard = counts[i];
+  const nlohmann::json sp = read_json_file(shard_part / "probe_summary.json");
+  EXPECT_EQ(sp["partial"]["probes_done"].get<int>(), 1);
+  EXPECT_EQ(sp["partial"]["probes_planned"].get<int>(), in_shard);
 }
 
 TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {

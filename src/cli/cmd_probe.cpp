@@ -4,6 +4,7 @@
 // the paper's Figs. 1 and 2 and the decay exponent alpha.
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "unjam/core/error.hpp"
 #include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
+#include "unjam/core/work_source.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/cd_path.hpp"
@@ -286,7 +288,8 @@ void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& chec
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   fit_window(o);  // refuse a bad window before any probe runs
-  const int total = static_cast<int>(campaign_targets(p, s).size());
+  const std::vector<int> targets = campaign_targets(p, s);
+  const int total = static_cast<int>(targets.size());
   if (total == 0)
     throw Error(o.dir + " has no force-carrying contact (fn > " + nlohmann::json(s.force_threshold).dump() +
                 " F0): nothing to probe");
@@ -296,9 +299,11 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   run.checkpoint = out / ("probe_checkpoint" + part + ".json");
   run.settings = to_json(s);
   run.fingerprint = packing_fingerprint(p);
-  // A shard probes the targets t with t mod K = i (campaign/distributor.hpp).
-  if (!o.partial.empty())
-    return write_partial(o, p, run.checkpoint, run.settings, (total - shard + shards - 1) / shards, out);
+  if (!o.partial.empty()) {
+    const auto planned = std::count_if(targets.begin(), targets.end(),
+                                       [&, shard = shard, shards = shards](int k) { return in_shard(k, shard, shards); });
+    return write_partial(o, p, run.checkpoint, run.settings, static_cast<int>(planned), out);
+  }
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
   if (!dist->gathers()) return run_worker(p, s, *dist);
   const auto lock = lock_output(out, shard, shards);

@@ -132,8 +132,13 @@ class QueueSource : public WorkSource {
   std::mutex& mutex_;
 };
 
-// One process; with shards > 1 it keeps only the tasks t with t mod shards == shard (the
-// split of a scheduler job array, `--shard i/K`: stable when a shard resumes).
+// Whether task t belongs to shard `shard` of `shards` (`--shard i/K`): t mod K == i. The task
+// is the campaign's own number (a probe campaign's: the contact), so the split is stable when
+// a shard resumes.
+inline bool in_shard(int task, int shard, int shards) { return task % shards == shard; }
+
+// One process; with shards > 1 it keeps only the tasks in its shard (in_shard: the split of a
+// scheduler job array, `--shard i/K`).
 class LocalDistributor : public WorkDistributor {
  public:
   explicit LocalDistributor(int shard = 0, int shards = 1);
