@@ -32,8 +32,10 @@ compare-probes):
                     ratio_min, ratio_max, alpha_lp, alpha_lp_err, alpha_cd, alpha_cd_err (the
                     power-law fits of each probe_summary.json; empty where a fit failed),
                     pieces_median (median over the shared contacts of cd's `sweeps`, the
-                    pieces of its path), cpu_s_per_probe_cd (sum of the cd ranks'
-                    busy_seconds / the cd campaign's probes), inertial (solved contacts
+                    pieces of its path), cpu_s_per_probe_cd (the cd campaign's busy
+                    seconds over all its runs / its timed probes, from all_runs; for a
+                    summary without all_runs, its ranks' busy_seconds / its probes),
+                    inertial (solved contacts
                     left out by --max-inertia), f_inertia_median_F0, f_inertia_max_F0 and
                     f_inertia_max_contact (cd's f_inertia / F0 over the solved contacts
                     that record it; empty for campaigns made before it was recorded)
@@ -73,6 +75,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
+from campaign_time import cpu_per_probe  # noqa: E402
 from unjam_plot import (UserError, json_number, read_csv, read_json, require_dir,  # noqa: E402
                         run_main, save_figure, warn, write_file_atomic)
 
@@ -302,12 +305,6 @@ def compare_pair(cd, lp, label):
     else:
         q1 = q3 = ratios[0] if ratios else math.nan
     largest = max(inertia) if inertia else (math.nan, None)  # (f_inertia / F0, contact)
-    ranks = s_cd.get("ranks")
-    busy = math.nan
-    if isinstance(ranks, list) and ranks and all(
-            isinstance(x, dict) and isinstance(x.get("busy_seconds"), (int, float))
-            for x in ranks):
-        busy = float(sum(x["busy_seconds"] for x in ranks))
     probes_cd = s_cd.get("probes")
     if not isinstance(probes_cd, int) or isinstance(probes_cd, bool) or probes_cd <= 0:
         probes_cd = len(cd["rows"])
@@ -325,7 +322,7 @@ def compare_pair(cd, lp, label):
         "alpha_cd": _optional_number(cd, "alpha"),
         "alpha_cd_err": _optional_number(cd, "alpha_err"),
         "pieces_median": float(statistics.median(cd["rows"][k]["sweeps"] for k in shared)),
-        "cpu_s_per_probe_cd": busy / probes_cd,
+        "cpu_s_per_probe_cd": cpu_per_probe(s_cd, probes_cd),
         "inertial": n_inertial,
         "f_inertia_median_F0": statistics.median(v for v, _ in inertia) if inertia else math.nan,
         "f_inertia_max_F0": largest[0],
@@ -427,7 +424,8 @@ def markdown(pairs, campaigns, command):
             f"over the contacts solved by cd, both methods on the same contacts. ratio: "
             f"F_crit(cd) / fn_max(lp) per solved contact (quartiles: statistics.quantiles, "
             f"n=4). alpha: the power-law fit of each campaign (± its error). pieces: median "
-            f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe. "
+            f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe, over all its "
+            f"runs. "
             f"f_inertia: the largest net force on a grain in the cd step, over the solved "
             f"contacts; inertial: solved contacts above the cd campaign's --max-inertia, left "
             f"out of the means and ratios as the campaign leaves them out.", ""]

@@ -12,6 +12,7 @@ import shutil
 import sys
 
 import sweep_table
+from campaign_time import cpu_per_probe
 from stage_runner import Stage, StageError, nonempty, read_json
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -154,14 +155,13 @@ def exact_probe_stage(R, name, d, g, sample, start, dep):
 def exact_row(d, mu, n, seed):
     """One row of EXACT_COLUMNS from d/exact-{cd,lp}/probe_summary.json."""
     s = {m: read_summary(o) for m, o in exact_probe_dirs(d).items()}
-    busy = sum(r.get("busy_seconds", 0.0) for r in s["cd"].get("ranks", []))
     return {"mu": fmt_mu(mu), "N": n, "seed": seed, "probes": s["cd"]["probes"],
             "not_exact": s["cd"]["not_converged"],
             "without_solution": s["cd"]["without_solution"],
             "F_crit_over_F_cont_lp": repr(float(s["lp"]["F_crit_over_F_cont"])),
             "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
             "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),
-            "cpu_s_per_probe_cd": repr(busy / max(1, s["cd"]["probes"]))}
+            "cpu_s_per_probe_cd": repr(cpu_per_probe(s["cd"], max(1, s["cd"]["probes"])))}
 
 
 def plot_stage(R, name, outputs, cmds, deps):

@@ -264,6 +264,69 @@ TEST_F(CliProbe, PartialWritesTheOutputsOfTheCheckpointAndLeavesTheCampaignToRes
   EXPECT_EQ(sp["partial"]["probes_planned"].get<int>(), in_shard);
 }
 
+TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
+  // A campaign of 6 probes made in three runs (stopped after 2, 2, then finished): each save
+  // of the checkpoint records the runs so far ("runs"), --partial and the summary report them
+  // (all_runs), and the last run's own wall time and ranks stay as they were.
+  const fs::path out = root_ / "campaign", part = root_ / "so-far";
+  fs::create_directories(out);
+  const std::string cmd = "probe " + q(dir_) + " --sample 6 --method lp --quiet --threads 1 --out " + q(out);
+  const auto runs_of_checkpoint = [&] { return read_json_file(out / "probe_checkpoint.json").at("runs"); };
+  testing::ToolRun r = run_tool(cmd + " --stop-after 2");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  const nlohmann::json first = runs_of_checkpoint();
+  EXPECT_EQ(first.at("runs").get<int>(), 1);
+  EXPECT_EQ(first.at("untimed_probes").get<int>(), 0);
+  EXPECT_GT(first.at("busy_seconds").get<double>(), 0.0);
+  EXPECT_GE(first.at("wall_seconds").get<double>(), first.at("busy_seconds").get<double>());  // one thread
+  r = run_tool(cmd + " --partial " + q(part));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json_file(part / "probe_summary.json").at("all_runs"), first);
+  EXPECT_NE(r.output.find("over 1 run: "), std::string::npos) << r.output;
+
+  r = run_tool(cmd + " --stop-after 2");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  const nlohmann::json second = runs_of_checkpoint();
+  EXPECT_EQ(second.at("runs").get<int>(), 2);
+  EXPECT_GT(second.at("busy_seconds").get<double>(), first.at("busy_seconds").get<double>());
+  EXPECT_GT(second.at("wall_seconds").get<double>(), first.at("wall_seconds").get<double>());
+
+  r = run_tool(cmd);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("over 3 runs: "), std::string::npos) << r.output;
+  const nlohmann::json s = read_json_file(out / "probe_summary.json");
+  const nlohmann::json& all = s.at("all_runs");
+  EXPECT_EQ(all.at("runs").get<int>(), 3);
+  EXPECT_EQ(all.at("untimed_probes").get<int>(), 0);
+  ASSERT_EQ(s.at("ranks").size(), 1u);
+  const double last_busy = s.at("ranks")[0].at("busy_seconds").get<double>();
+  EXPECT_NEAR(all.at("busy_seconds").get<double>(), second.at("busy_seconds").get<double>() + last_busy, 1e-9);
+  EXPECT_GE(all.at("wall_seconds").get<double>(),
+            second.at("wall_seconds").get<double>() + s.at("wall_seconds").get<double>());
+
+  // A checkpoint without the record (written before it was kept, or with it damaged) resumes
+  // as before; its probes are counted as untimed.
+  for (const nlohmann::json bad : {nlohmann::json(nullptr), nlohmann::json("x"),
+                                   nlohmann::json{{"runs", -1}, {"wall_seconds", 1}, {"busy_seconds", 1}, {"untimed_probes", 0}}}) {
+    const fs::path again = root_ / "again";
+    fs::remove_all(again);
+    fs::create_directories(again);
+    const std::string cmd2 = "probe " + q(dir_) + " --sample 6 --method lp --quiet --threads 1 --out " + q(again);
+    ASSERT_EQ(run_tool(cmd2 + " --stop-after 2").exit_code, 3);
+    nlohmann::json ck = read_json_file(again / "probe_checkpoint.json");
+    if (bad.is_null()) ck.erase("runs");
+    else ck["runs"] = bad;
+    write_file_atomic(again / "probe_checkpoint.json", ck.dump());
+    r = run_tool(cmd2);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("2 probes from a checkpoint that did not record its time"), std::string::npos) << r.output;
+    const nlohmann::json a = read_json_file(again / "probe_summary.json").at("all_runs");
+    EXPECT_EQ(a.at("runs").get<int>(), 1) << bad;
+    EXPECT_EQ(a.at("untimed_probes").get<int>(), 2) << bad;
+    EXPECT_EQ(read_file(again / "probes.csv"), read_file(out / "probes.csv"));
+  }
+}
+
 TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   // A cd campaign stopped at dt = 1e-3 (exit 3) is not resumed at the default dt: the error
   // names the setting and both values, the checkpoint is kept, and the same command with

@@ -187,7 +187,7 @@ class ComparePairs(unittest.TestCase):
             self.assertEqual(float(row["alpha_cd"]), s_cd["alpha"])
             self.assertEqual(float(row["alpha_lp_err"]), s_lp["alpha_err"])
             self.assertClose(float(row["cpu_s_per_probe_cd"]),
-                             sum(x["busy_seconds"] for x in s_cd["ranks"]) / s_cd["probes"])
+                             s_cd["all_runs"]["busy_seconds"] / s_cd["probes"])
             self.assertEqual(float(row["mu"]), s_cd["mu"])
             self.assertEqual((int(row["N"]), int(row["seed"])), (s_cd["N"], s_cd["seed"]))
 
@@ -353,6 +353,27 @@ class ComparePairs(unittest.TestCase):
             self.assertIn("(partial: 12 of 40 probes of the cd campaign so far)", f.read())
         self.assertEqual(read_rows(os.path.join(out, "compare.csv"))[0]["F_crit_over_F_cont_cd"],
                          R["compare"][0]["F_crit_over_F_cont_cd"])
+
+    def test_11_cpu_per_probe_counts_every_run(self):
+        # A resumed campaign: all_runs (every run's busy seconds) gives the CPU column, over the
+        # probes whose runs recorded their time; a summary without it falls back to its last
+        # run's ranks over all its probes.
+        def resumed(s):
+            s["all_runs"] = {"runs": 3, "wall_seconds": 100.0, "busy_seconds": 90.0,
+                             "untimed_probes": 2}
+            s["ranks"] = [{"rank": 0, "threads": 1, "probes": 4, "busy_seconds": 7.0}]
+
+        def older(s):
+            del s["all_runs"]
+            s["ranks"] = [{"rank": 0, "threads": 1, "probes": 12, "busy_seconds": 6.0}]
+
+        for name, edit, cpu in (("cd-resumed", resumed, 90.0 / 10), ("cd-older", older, 6.0 / 12)):
+            cd = copy_campaign(R["cd"]["p50-mu1"], name, edit_summary=edit)
+            out = os.path.join(R["tmp"], "compare-" + name)
+            p = run(cd, R["lp"]["p50-mu1"], "--out", out)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertClose(float(read_rows(os.path.join(out, "compare.csv"))[0]["cpu_s_per_probe_cd"]),
+                             cpu, name)
 
     def test_7_errors_write_nothing(self):
         cd1, lp1 = R["cd"]["p50-mu1"], R["lp"]["p50-mu1"]

@@ -47,6 +47,7 @@ std::string summary_of_results(const fs::path& dir) {
   nlohmann::json j = nlohmann::json::parse(read_file(dir / "probe_summary.json"));
   j.erase("wall_seconds");
   j.erase("ranks");
+  j.erase("all_runs");
   j.erase("command");
   return j.dump(2);
 }
@@ -255,6 +256,30 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   expect_same_probe_outputs(one, out);
+
+  // The summary's all_runs: the shards' runs summed; a shard file without them (written
+  // before they were recorded) has its probes untimed.
+  double busy = 0.0;
+  int rows_2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    const auto shard = nlohmann::json::parse(read_file(out / ("probe_shard-" + std::to_string(i) + "-of-3.json")));
+    EXPECT_EQ(shard.at("all_runs").at("runs").get<int>(), 1);
+    busy += shard.at("all_runs").at("busy_seconds").get<double>();
+    if (i == 2) rows_2 = static_cast<int>(shard.at("state").at("rows").size());
+  }
+  const nlohmann::json all = nlohmann::json::parse(read_file(out / "probe_summary.json")).at("all_runs");
+  EXPECT_EQ(all.at("runs").get<int>(), 3);
+  EXPECT_EQ(all.at("untimed_probes").get<int>(), 0);
+  EXPECT_NEAR(all.at("busy_seconds").get<double>(), busy, 1e-9);
+  const fs::path file_2 = out / "probe_shard-2-of-3.json";
+  auto shard_2 = nlohmann::json::parse(read_file(file_2));
+  shard_2.erase("all_runs");
+  write_file_atomic(file_2, shard_2.dump());
+  ASSERT_EQ(shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'")).exit_code, 0);
+  const nlohmann::json old = nlohmann::json::parse(read_file(out / "probe_summary.json")).at("all_runs");
+  EXPECT_EQ(old.at("runs").get<int>(), 2);
+  EXPECT_EQ(old.at("untimed_probes").get<int>(), rows_2);
+  EXPECT_GT(rows_2, 0);
 }
 
 TEST_F(Distributed, ShardsMergedKeepTheLargestInertiaOfTheirRuns) {

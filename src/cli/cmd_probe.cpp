@@ -226,11 +226,18 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
   return FitWindow{o.fit_window[0], o.fit_window[1]};
 }
 
+// The time of a campaign's run for its summary: this run's wall time and ranks, and every
+// run's (CampaignTime, probe/campaign_run).
+struct RunTime {
+  double wall = 0.0;
+  std::vector<RankLoad> loads;
+  CampaignTime all_runs;
+};
+
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
-                     const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
-                     const fs::path& out, int planned = 0);
+                     const CampaignState& state, const RunTime& time, const fs::path& out, int planned = 0);
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
-                 const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file);
+                 const CampaignState& state, const RunTime& time, const fs::path& file);
 
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
 void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist) {
@@ -242,9 +249,12 @@ void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& di
   run_campaign(p, s, unused, hooks, dist);
 }
 
-// The state a stopped run saved to `checkpoint`, or an empty one (probe/campaign_run).
-CampaignState start_state(const fs::path& checkpoint, const Packing& p, const nlohmann::json& settings_json) {
+// The state a stopped run saved to `checkpoint`, or an empty one (probe/campaign_run), and
+// the time of the runs that made it (`earlier`).
+CampaignState start_state(const fs::path& checkpoint, const Packing& p, const nlohmann::json& settings_json,
+                          CampaignTime& earlier) {
   SavedCampaign saved = load_campaign_checkpoint(checkpoint, p, settings_json);
+  earlier = saved.time;
   if (!saved.set_aside.empty())
     std::fprintf(stderr, "warning: %s was saved from another packing (or an older unjam); set aside as %s, "
                  "starting over\n", checkpoint.c_str(), saved.set_aside.c_str());
@@ -279,11 +289,13 @@ void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& chec
   if (!fs::exists(checkpoint))
     throw Error("no checkpoint of this campaign in " + out.string() + " (" + checkpoint.filename().string() +
                 "): it has not started, or it has finished and written its outputs there");
-  const std::optional<CampaignState> state =
-      read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings);
+  const std::string text = read_file(checkpoint);
+  const std::optional<CampaignState> state = read_campaign_checkpoint(text, checkpoint.string(), p, settings);
   if (!state) throw Error(checkpoint.string() + " was saved from another packing than " + o.dir);
   const DirLock lock(dir, command_line());
-  finish_campaign(o, p, settings, *state, 0.0, {}, dir, planned);
+  RunTime time;  // this run's: none; the runs' so far: the checkpoint's record
+  time.all_runs = campaign_time_of_checkpoint(nlohmann::json::parse(text), static_cast<long long>(state->rows.size()));
+  finish_campaign(o, p, settings, *state, time, dir, planned);
 }
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
@@ -311,7 +323,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   run.stop_after = o.stop_after;
   run.interrupted = InterruptGuard::requested;
   run.progress = progress_printer(o);
-  CampaignState state = start_state(run.checkpoint, p, run.settings);
+  CampaignState state = start_state(run.checkpoint, p, run.settings, run.earlier);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
   std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads%s\n", total,
@@ -324,23 +336,25 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   if (!r.finished)
     throw Interrupted("stopped after " + std::to_string(state.rows.size()) +
                 " probes; run the same command again to resume");
+  const RunTime time{r.wall_s, dist->loads(), r.time};
   if (shards > 1)
-    write_shard(o, run.fingerprint, run.settings, state, r.wall_s, *dist, out / shard_file_name("probe_shard", shard, shards));
+    write_shard(o, run.fingerprint, run.settings, state, time, out / shard_file_name("probe_shard", shard, shards));
   else
-    finish_campaign(o, p, run.settings, state, r.wall_s, dist->loads(), out);
+    finish_campaign(o, p, run.settings, state, time, out);
   fs::remove(run.checkpoint);
 }
 
 // A finished shard: its state, what merge needs to write the outputs, its own run.
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
-                 const CampaignState& state, double wall, const WorkDistributor& dist, const fs::path& file) {
+                 const CampaignState& state, const RunTime& time, const fs::path& file) {
   const nlohmann::json j = {{"packing", fingerprint}, {"settings", settings_json}, {"state", to_json(state)},
                             {"options", {{"fit_window", o.fit_window}}},  // the summary's; the rest is in settings
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
-                            {"wall_seconds", wall}, {"ranks", rank_loads_json<nlohmann::json>(dist.loads(), "probes")}};
+                            {"wall_seconds", time.wall}, {"ranks", rank_loads_json<nlohmann::json>(time.loads, "probes")},
+                            {"all_runs", to_json(time.all_runs)}};
   write_file_atomic(file, j.dump());
   std::printf("shard %s: %zu probes of %s in %s -> %s (merge the shards with `unjam merge`)\n",
-              o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(wall).c_str(),
+              o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(time.wall).c_str(),
               file.c_str());
 }
 
@@ -348,8 +362,9 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
 // planned > 0: the outputs of a campaign's checkpoint (--partial), which has not probed all
 // `planned` contacts yet; its wall time and ranks are unknown (null, []).
 void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
-                     const CampaignState& state, double wall, const std::vector<RankLoad>& loads,
-                     const fs::path& out, int planned) {
+                     const CampaignState& state, const RunTime& time, const fs::path& out, int planned) {
+  const double wall = time.wall;
+  const std::vector<RankLoad>& loads = time.loads;
   const CampaignSummary sum = summarize(p, state, fit_window(o), o.max_inertia);
   const PackingStats stats = compute_packing_stats(p);
   write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
@@ -364,6 +379,7 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   summary["g"] = o.g;
   summary["wall_seconds"] = planned > 0 ? nlohmann::json(nullptr) : nlohmann::json(wall);
   summary["ranks"] = rank_loads_json<nlohmann::json>(loads, "probes");
+  summary["all_runs"] = to_json(time.all_runs);
   if (planned > 0) summary["partial"] = {{"probes_done", sum.probes}, {"probes_planned", planned}};
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
 
@@ -394,6 +410,20 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);
   else
     std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
+  const CampaignTime& all = time.all_runs;
+  if (all.runs > 1 || all.untimed_probes > 0 || planned > 0) {
+    std::printf("  over %d run%s: %s of wall time, %s busy", all.runs, all.runs == 1 ? "" : "s",
+                format_duration(all.wall_seconds).c_str(), format_duration(all.busy_seconds).c_str());
+    const long long timed = static_cast<long long>(sum.probes) - all.untimed_probes;
+    if (timed > 0) {
+      std::printf(" (%s per probe", format_duration(all.busy_seconds / static_cast<double>(timed)).c_str());
+      if (all.untimed_probes > 0) std::printf(" over the %lld timed", timed);
+      std::printf(")");
+    }
+    if (all.untimed_probes > 0)
+      std::printf("; %lld probes from a checkpoint that did not record its time", all.untimed_probes);
+    std::printf("\n");
+  }
   if (loads.size() > 1)
     for (const RankLoad& l : loads)
       std::printf("  rank %d: %lld probes, %s busy (%d threads)\n", l.rank, l.tasks,
@@ -440,8 +470,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   o.max_inertia = settings.value("max_inertia_F0", 0.0);
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
   CampaignState state = empty_campaign_state(p);
-  std::vector<RankLoad> loads;
-  double wall = 0.0;
+  RunTime time;
   const std::string fingerprint = packing_fingerprint(p);
   for (const nlohmann::json& j : shards) {
     if (j.value("packing", std::string()) != fingerprint)
@@ -451,16 +480,19 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
     const CampaignState part = campaign_state_from_json(j.at("state"), p);
     for (const ProbeRow& r : part.rows) state.rows.push_back(r);
     state.average.merge(part.average);
-    wall = std::max(wall, j.at("wall_seconds").get<double>());
+    time.wall = std::max(time.wall, j.at("wall_seconds").get<double>());
     RankLoad load;
-    load.rank = static_cast<int>(loads.size());
+    load.rank = static_cast<int>(time.loads.size());
     load.tasks = static_cast<long long>(part.rows.size());
     for (const auto& l : j.at("ranks")) load.busy_seconds += l.at("busy_seconds").get<double>();
-    loads.push_back(load);
+    time.loads.push_back(load);
+    // every shard's runs (a shard written before they were recorded: its probes untimed)
+    time.all_runs = time.all_runs + campaign_time_of_checkpoint({{"runs", j.value("all_runs", nlohmann::json())}},
+                                                                static_cast<long long>(part.rows.size()));
   }
   std::sort(state.rows.begin(), state.rows.end(),
             [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
-  finish_campaign(o, p, first.at("settings"), state, wall, loads, out);
+  finish_campaign(o, p, first.at("settings"), state, time, out);
   return true;
 }
 

@@ -208,9 +208,8 @@ class MpiDistributor : public WorkDistributor {
         const std::string msg = receive(MPI_ANY_SOURCE, request_tag(round), &from);
         ByteReader r(msg);
         const int want = r.get<std::int32_t>();
-        RankLoad& load = loads_[from];
-        load.threads = r.get<std::int32_t>();
-        load.busy_seconds = r.get<double>();
+        const int threads = r.get<std::int32_t>();
+        const double busy = r.get<double>();
         std::vector<TaskResult> results(r.get<std::uint64_t>());
         for (TaskResult& res : results) {
           res.task = r.get<std::int32_t>();
@@ -220,7 +219,12 @@ class MpiDistributor : public WorkDistributor {
         }
         std::vector<int> tasks;
         {
+          // The loads under the gathering's lock: a checkpoint taken in the gathering reads
+          // them (run_checkpointed_campaign).
           const std::lock_guard lock(mutex);
+          RankLoad& load = loads_[from];
+          load.threads = threads;
+          load.busy_seconds = busy;
           queue.cancelled(drop_cancelled(results));
           load.tasks += static_cast<long long>(results.size());
           if (!results.empty()) loop.gather(results);

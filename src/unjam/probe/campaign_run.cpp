@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "unjam/core/atomic_file.hpp"
 
@@ -11,12 +12,45 @@ CampaignState empty_campaign_state(const Packing& packing) {
   return CampaignState(ResponseGrid::for_cell(packing.cell, 2.0 * packing.mean_radius()));
 }
 
+CampaignTime operator+(const CampaignTime& a, const CampaignTime& b) {
+  return {a.runs + b.runs, a.wall_seconds + b.wall_seconds, a.busy_seconds + b.busy_seconds,
+          a.untimed_probes + b.untimed_probes};
+}
+
+nlohmann::json to_json(const CampaignTime& t) {
+  return {{"runs", t.runs}, {"wall_seconds", t.wall_seconds}, {"busy_seconds", t.busy_seconds},
+          {"untimed_probes", t.untimed_probes}};
+}
+
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes) {
+  CampaignTime untimed;
+  untimed.untimed_probes = probes;
+  const auto runs = checkpoint.find("runs");
+  if (runs == checkpoint.end() || !runs->is_object()) return untimed;
+  const auto number = [&](const char* key, double& to) {
+    const auto it = runs->find(key);
+    if (it == runs->end() || !it->is_number()) return false;
+    to = it->get<double>();
+    return std::isfinite(to) && to >= 0.0;
+  };
+  double n = 0.0, wall = 0.0, busy = 0.0, u = 0.0;
+  if (!number("runs", n) || !number("wall_seconds", wall) || !number("busy_seconds", busy) ||
+      !number("untimed_probes", u) || n != std::floor(n) || n > 1e9 || u != std::floor(u) ||
+      u > static_cast<double>(probes))
+    return untimed;
+  return {static_cast<int>(n), wall, busy, static_cast<long long>(u)};
+}
+
 SavedCampaign load_campaign_checkpoint(const std::filesystem::path& checkpoint, const Packing& packing,
                                        const nlohmann::json& settings) {
   SavedCampaign saved;
   if (!std::filesystem::exists(checkpoint)) return saved;
-  saved.state = read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), packing, settings);
-  if (saved.state) return saved;
+  const std::string text = read_file(checkpoint);
+  saved.state = read_campaign_checkpoint(text, checkpoint.string(), packing, settings);
+  if (saved.state) {
+    saved.time = campaign_time_of_checkpoint(nlohmann::json::parse(text), static_cast<long long>(saved.state->rows.size()));
+    return saved;
+  }
   saved.set_aside = checkpoint.string() + ".stale";
   rename_file(checkpoint, saved.set_aside);
   return saved;
@@ -35,8 +69,18 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   const auto t0 = clock::now();
   auto last_checkpoint = t0;
   const std::size_t done_before = state.rows.size();
+  // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
+  // distributor has them: within the gathering, where every rank's load is updated).
+  const auto time_so_far = [&] {
+    CampaignTime now;
+    now.runs = 1;
+    now.wall_seconds = seconds(t0);
+    for (const RankLoad& l : distributor.loads()) now.busy_seconds += l.busy_seconds;
+    return options.earlier + now;
+  };
   const auto save = [&](const CampaignState& st) {
-    write_file_atomic(options.checkpoint, campaign_checkpoint_text(options.fingerprint, options.settings, st));
+    write_file_atomic(options.checkpoint,
+                      campaign_checkpoint_text(options.fingerprint, options.settings, st, to_json(time_so_far())));
   };
   CampaignHooks hooks;
   if (options.progress)
@@ -58,6 +102,7 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   CheckpointedCampaignResult result;
   result.finished = run_campaign(packing, settings, state, hooks, distributor);
   result.wall_s = seconds(t0);
+  result.time = time_so_far();
   if (!result.finished) save(state);
   return result;
 }

@@ -21,9 +21,27 @@ namespace unjam {
 // (ResponseGrid::for_cell(cell, 2 <R>)).
 CampaignState empty_campaign_state(const Packing& packing);
 
+// The time a campaign's probes took over the runs that made them (docs/probe.md,
+// "Campaigns"), as its checkpoint records it ("runs"): how many runs, their wall time and their
+// busy seconds (RankLoad::busy_seconds summed over ranks), each run counted to its last save
+// (a run killed without its final save, to its last periodic one). untimed_probes: probes of a
+// checkpoint that did not record it (written before it was, or with the record damaged).
+struct CampaignTime {
+  int runs = 0;
+  double wall_seconds = 0.0;
+  double busy_seconds = 0.0;
+  long long untimed_probes = 0;
+};
+CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
+nlohmann::json to_json(const CampaignTime& t);
+// The record of a checkpoint's text (its "runs"); a checkpoint of `probes` probes without a
+// valid one has them all untimed. Never throws: the record is not part of the state.
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes);
+
 struct SavedCampaign {
   std::optional<CampaignState> state;  // the saved state, if the file belongs to this run
   std::filesystem::path set_aside;     // where a checkpoint of another packing went; empty if none
+  CampaignTime time;                   // of the runs that made `state` (empty if none)
 };
 
 // The state saved in `checkpoint`, if it exists and was saved from this packing (its
@@ -44,18 +62,21 @@ struct CheckpointedCampaignOptions {
   std::function<bool()> interrupted;
   // After every gathered probe: (done, total, elapsed s, ETA s; -1 unknown). May be empty.
   std::function<void(int, int, double, double)> progress;
+  CampaignTime earlier;  // of the runs before this one (SavedCampaign::time)
 };
 
 struct CheckpointedCampaignResult {
   bool finished = false;  // false: stopped, the state saved to the checkpoint
   double wall_s = 0.0;
+  CampaignTime time;  // options.earlier and this run
 };
 
 // Probes every target not yet in `state` (run_campaign over `distributor`), saving the state
 // to options.checkpoint at most every checkpoint_s seconds (and at every probe once
 // interrupted), and once more if it stops early: the finished probes only, those abandoned
-// on an interrupt are probed again on resume. The checkpoint is left in place: remove it
-// once the outputs are written.
+// on an interrupt are probed again on resume. Each save records the time of the runs so far
+// (options.earlier and this run: its wall time and the distributor's busy seconds, read at
+// the save). The checkpoint is left in place: remove it once the outputs are written.
 CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
                                                      const CampaignSettings& settings,
                                                      CampaignState& state,

@@ -424,13 +424,14 @@ CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p
 }
 
 std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
-                                     const CampaignState& state) {
+                                     const CampaignState& state, const nlohmann::json& runs) {
   const nlohmann::json state_json = to_json(state);
-  return nlohmann::json{{"packing", fingerprint},
-                        {"settings", settings},
-                        {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
-                        {"state", state_json}}
-      .dump();
+  nlohmann::json j = {{"packing", fingerprint},
+                      {"settings", settings},
+                      {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
+                      {"state", state_json}};
+  if (!runs.is_null()) j["runs"] = runs;
+  return j.dump();
 }
 
 std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
