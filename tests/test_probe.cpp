@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <string>
 #include <unistd.h>
 #include <utility>
@@ -307,6 +309,58 @@ TEST(ProbeCampaign, StopsAndResumesWithoutRepeatingProbes) {
   ASSERT_EQ(resumed.rows.size(), whole.rows.size());
   for (std::size_t i = 0; i < whole.rows.size(); ++i) EXPECT_EQ(resumed.rows[i].f_crit, whole.rows[i].f_crit);
   EXPECT_TRUE(resumed.average == whole.average);
+}
+
+TEST(ProbeCampaign, RunningProbesReportThemselvesAndTheirResultsStayTheSame) {
+  // CampaignHooks::running, every 0 s: each cd probe calls it from its polls, with its own
+  // contact and non-decreasing seconds; with an interval no probe reaches it is never called;
+  // either way the rows are those of a campaign without it, bit for bit.
+  const Packing& p = fixture_p50();
+  CampaignSettings s = campaign_settings_for(p);
+  s.method = ProbeMethod::kCd;
+  s.sample = 6;
+  const std::vector<int> targets = campaign_targets(p, s);
+  const ResponseGrid grid = ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius());
+  CampaignState plain(grid);
+  ASSERT_TRUE(run_campaign(p, s, plain));
+
+  std::mutex mutex;
+  std::map<int, std::vector<double>> calls;  // contact -> its seconds, in order
+  CampaignHooks every_poll;
+  every_poll.running_every_s = 0.0;
+  every_poll.running = [&](int contact, double seconds) {
+    const std::lock_guard lock(mutex);
+    calls[contact].push_back(seconds);
+  };
+  CampaignState reported(grid);
+  ASSERT_TRUE(run_campaign(p, s, reported, every_poll));
+  EXPECT_EQ(calls.size(), targets.size());
+  for (const int k : targets) {
+    ASSERT_EQ(calls.count(k), 1u) << "contact " << k;
+    EXPECT_TRUE(std::is_sorted(calls[k].begin(), calls[k].end())) << "contact " << k;
+    EXPECT_GE(calls[k].front(), 0.0);
+  }
+
+  calls.clear();
+  CampaignHooks never = every_poll;
+  never.running_every_s = 1e9;
+  CampaignState quiet(grid);
+  ASSERT_TRUE(run_campaign(p, s, quiet, never));
+  EXPECT_TRUE(calls.empty());
+
+  for (const CampaignState* st : {&reported, &quiet}) {
+    ASSERT_EQ(st->rows.size(), plain.rows.size());
+    for (std::size_t i = 0; i < plain.rows.size(); ++i) {
+      EXPECT_EQ(st->rows[i].contact, plain.rows[i].contact);
+      EXPECT_EQ(st->rows[i].f_crit, plain.rows[i].f_crit);
+      EXPECT_EQ(st->rows[i].sweeps, plain.rows[i].sweeps);
+    }
+    EXPECT_TRUE(st->average == plain.average);
+  }
+  CampaignHooks bad = every_poll;
+  bad.running_every_s = -1.0;
+  CampaignState unused(grid);
+  EXPECT_THROW(run_campaign(p, s, unused, bad), Error);
 }
 
 TEST(ProbeCampaign, RecordedIntegerSettingsThatAreHugeFloatsAreRefused) {

@@ -239,10 +239,22 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, const RunTime& time, const fs::path& file);
 
+// A sign of life of probes that run for minutes to hours (cd at 2000 disks and more), every
+// CampaignHooks::running_every_s of a probe on stderr; none with --quiet.
+std::function<void(int, double)> running_printer(const ProbeOptions& o, const WorkDistributor& dist) {
+  if (o.quiet) return {};
+  const std::string rank = dist.ranks() > 1 ? "rank " + std::to_string(dist.rank()) + ": " : "";
+  return [rank](int contact, double seconds) {
+    std::fprintf(stderr, "  %scontact %d: probing for %s\n", rank.c_str(), contact, format_duration(seconds).c_str());
+  };
+}
+
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
-void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist) {
+void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist,
+                const std::function<void(int, double)>& running) {
   CampaignState unused = empty_campaign_state(p);
   CampaignHooks hooks;
+  hooks.running = running;
   hooks.should_stop = InterruptGuard::requested;
   hooks.cancel = InterruptGuard::requested;  // this rank's own signal (mpirun forwards SIGTERM to every rank)
   const InterruptGuard interrupts;
@@ -317,12 +329,13 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     return write_partial(o, p, run.checkpoint, run.settings, static_cast<int>(planned), out);
   }
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
-  if (!dist->gathers()) return run_worker(p, s, *dist);
+  if (!dist->gathers()) return run_worker(p, s, *dist, running_printer(o, *dist));
   const auto lock = lock_output(out, shard, shards);
   run.checkpoint_s = o.checkpoint_s;
   run.stop_after = o.stop_after;
   run.interrupted = InterruptGuard::requested;
   run.progress = progress_printer(o);
+  run.running = running_printer(o, *dist);
   CampaignState state = start_state(run.checkpoint, p, run.settings, run.earlier);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";

@@ -95,6 +95,8 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
     save(st);
   };
   hooks.cancel = options.interrupted;
+  hooks.running = options.running;
+  hooks.running_every_s = options.running_every_s;
   hooks.should_stop = [&] {
     return interrupted() ||
            (options.stop_after > 0 && state.rows.size() >= done_before + options.stop_after);

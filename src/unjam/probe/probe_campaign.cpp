@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -103,15 +104,35 @@ ProbeResult decode(const std::string& bytes) {
   return r;
 }
 
+// s with its probes' cancel also calling `running` (CampaignHooks::running) every `every`
+// seconds of the probe of contact k.
+CampaignSettings with_running(const CampaignSettings& s, int k, const std::function<void(int, double)>& running,
+                              double every) {
+  CampaignSettings st = s;
+  using clock = std::chrono::steady_clock;
+  st.nlgs.cancel = [cancel = s.nlgs.cancel, &running, k, every, t0 = clock::now(), next = every]() mutable {
+    const double seconds = std::chrono::duration<double>(clock::now() - t0).count();
+    if (seconds >= next) {
+      running(k, seconds);
+      next = every > 0.0 ? every * (std::floor(seconds / every) + 1.0) : seconds;
+    }
+    return cancel && cancel();
+  };
+  return st;
+}
+
 // The work of a loop of probes on this process: task t probes contacts[t] (contact t if
 // `contacts` is null), one probe per thread at a time on omp_get_max_threads() threads, each
 // thread with its own worker (the LP probe keeps its model); each result as bytes. A probe
-// that s.nlgs.cancel abandons comes back cancelled (work_off).
+// that s.nlgs.cancel abandons comes back cancelled (work_off). `running` (may be empty): see
+// CampaignHooks::running.
 void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s,
-                 const std::vector<int>* contacts) {
+                 const std::vector<int>* contacts, const std::function<void(int, double)>& running = {},
+                 double running_every_s = 0.0) {
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;
     try {
+      if (running) return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
       return encode(w.probe(p, s, k));
     } catch (const Cancelled&) {
       throw;
@@ -252,6 +273,8 @@ bool run_campaign(const Packing& p, const CampaignSettings& s, CampaignState& st
 
 bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignState& state,
                   const CampaignHooks& hooks, WorkDistributor& distributor) {
+  if (hooks.running && !(hooks.running_every_s >= 0.0))
+    throw Error("campaign: running_every_s must be >= 0 (got " + std::to_string(hooks.running_every_s) + ")");
   CampaignSettings s = settings;
   s.nlgs.cancel = either(settings.nlgs.cancel, hooks.cancel);
   const std::vector<int> all = campaign_targets(p, s);
@@ -270,7 +293,7 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   WorkLoop loop;
   loop.should_stop = either(hooks.should_stop, s.nlgs.cancel);
-  loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, nullptr); };
+  loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, nullptr, hooks.running, hooks.running_every_s); };
   loop.gather = [&](std::vector<TaskResult>& results) {
     for (const TaskResult& tr : results) {
       const ProbeResult r = decode(tr.bytes);

@@ -94,6 +94,11 @@ struct CampaignHooks {
   // threads, so it must be thread safe; once it returns true they are abandoned (no row,
   // computed again when the campaign resumes) and no more are handed out. May be empty.
   std::function<bool()> cancel;
+  // A sign of life of long probes: called from a running probe's thread (nlgs, lemke and cd,
+  // where they poll cancel) each time another `running_every_s` seconds of it have passed,
+  // with its contact and its seconds so far (wall time). Thread safe; may be empty.
+  std::function<void(int contact, double seconds)> running;
+  double running_every_s = 300.0;
 };
 
 struct CampaignSummary {
