@@ -282,6 +282,14 @@ TEST(ProbeCampaign, ExactCdProbeGivesTheSameBytesWithOneAndTwoThreads) {
   }
 }
 
+// The campaign settings of `unjam probe P --sample K --method cd` on packing p.
+CampaignSettings cd_sample(const Packing& p, int sample) {
+  CampaignSettings s = campaign_settings_for(p);
+  s.method = ProbeMethod::kCd;
+  s.sample = sample;
+  return s;
+}
+
 TEST(ProbeCampaign, StopsAndResumesWithoutRepeatingProbes) {
   const Packing& p = fixture_p50();
   CampaignSettings s;
@@ -316,9 +324,7 @@ TEST(ProbeCampaign, RunningProbesReportThemselvesAndTheirResultsStayTheSame) {
   // contact and non-decreasing seconds; with an interval no probe reaches it is never called;
   // either way the rows are those of a campaign without it, bit for bit.
   const Packing& p = fixture_p50();
-  CampaignSettings s = campaign_settings_for(p);
-  s.method = ProbeMethod::kCd;
-  s.sample = 6;
+  const CampaignSettings s = cd_sample(p, 6);
   const std::vector<int> targets = campaign_targets(p, s);
   const ResponseGrid grid = ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius());
   CampaignState plain(grid);
@@ -612,9 +618,7 @@ TEST(ProbeCampaign, CancelledProbeLeavesNoRowAndResumesToTheSameBytes) {
   // probe: the run stops, the checkpoint holds the 3 finished probes only, and the resumed
   // run probes the other 5 to the checkpoint bytes of an uninterrupted run.
   const Packing& p = fixture_p50();
-  CampaignSettings s = campaign_settings_for(p);
-  s.method = ProbeMethod::kCd;
-  s.sample = 8;
+  const CampaignSettings s = cd_sample(p, 8);
   const std::vector<int> targets = campaign_targets(p, s);
   ASSERT_EQ(targets.size(), 8u);
   const std::filesystem::path dir =
