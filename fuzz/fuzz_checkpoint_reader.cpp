@@ -3,7 +3,10 @@
 // whole (fingerprint, settings, hash) and its "state" also on its own (an edit that recomputed
 // the hash). Every input must end in unjam::Error, in "another packing" (nullopt), or in a
 // state run_campaign could have made on the packing that saves and reloads unchanged; a
-// crash, a sanitizer report, a timeout or another exception fails.
+// crash, a sanitizer report, a timeout or another exception fails. Its record of the runs'
+// time (campaign_time_of_checkpoint) is read from any JSON object without throwing, and is
+// either a valid one or none (every probe untimed).
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -12,6 +15,7 @@
 #include "fuzz_common.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/campaign_run.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 
 namespace {
@@ -48,6 +52,12 @@ std::vector<std::string> seeds() {
   }
   state.rows.push_back({30, p.contacts[30].a, p.contacts[30].b, 1.0, 0.0, false, 0, 1e300, 2, 0.0});
   out.push_back(unjam::campaign_checkpoint_text(fingerprint, settings(), state));
+  unjam::CampaignTime time;
+  time.runs = 2;
+  time.wall_seconds = 12.5;
+  time.busy_seconds = 11.0;
+  time.untimed_probes = 1;
+  out.push_back(unjam::campaign_checkpoint_text(fingerprint, settings(), state, unjam::to_json(time)));
   return out;
 }
 
@@ -97,6 +107,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const unjam::Error&) {
   }
   const auto j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_object()) {
+    const long long probes = 3;
+    const unjam::CampaignTime t = unjam::campaign_time_of_checkpoint(j, probes);
+    const bool valid = t.runs >= 0 && std::isfinite(t.wall_seconds) && t.wall_seconds >= 0.0 &&
+                       std::isfinite(t.busy_seconds) && t.busy_seconds >= 0.0 && t.untimed_probes >= 0 &&
+                       t.untimed_probes <= probes;
+    if (!valid) accepted_invalid("a record of the runs' time out of range");
+  }
   if (!j.is_object() || !j.contains("state")) return 0;
   try {
     check_accepted(unjam::campaign_state_from_json(j["state"], packing()));
