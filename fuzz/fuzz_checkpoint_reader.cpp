@@ -56,7 +56,7 @@ std::vector<std::string> seeds() {
   time.runs = 2;
   time.wall_seconds = 12.5;
   time.busy_seconds = 11.0;
-  time.untimed_probes = 1;
+  time.untimed = 1;
   out.push_back(unjam::campaign_checkpoint_text(fingerprint, settings(), state, unjam::to_json(time)));
   return out;
 }
@@ -111,8 +111,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const long long probes = 3;
     const unjam::CampaignTime t = unjam::campaign_time_of_checkpoint(j, probes);
     const bool valid = t.runs >= 0 && std::isfinite(t.wall_seconds) && t.wall_seconds >= 0.0 &&
-                       std::isfinite(t.busy_seconds) && t.busy_seconds >= 0.0 && t.untimed_probes >= 0 &&
-                       t.untimed_probes <= probes;
+                       std::isfinite(t.busy_seconds) && t.busy_seconds >= 0.0 && t.untimed >= 0 &&
+                       t.untimed <= probes;
     if (!valid) accepted_invalid("a record of the runs' time out of range");
   }
   if (!j.is_object() || !j.contains("state")) return 0;

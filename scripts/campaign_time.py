@@ -17,8 +17,8 @@ def cpu_per_probe(summary, probes):
     summary written before all_runs was recorded, its last run's ranks over all its probes
     (which understates a resumed campaign). NaN where neither is readable."""
     runs = summary.get("all_runs")
-    if isinstance(runs, dict) and _number(runs.get("busy_seconds")) and _number(runs.get("untimed_probes")):
-        timed = probes - runs["untimed_probes"]
+    if isinstance(runs, dict) and _number(runs.get("busy_seconds")) and _number(runs.get("untimed")):
+        timed = probes - runs["untimed"]
         return float(runs["busy_seconds"]) / timed if timed > 0 else math.nan
     ranks = summary.get("ranks")
     if isinstance(ranks, list) and ranks and all(

@@ -276,7 +276,7 @@ TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
   ASSERT_EQ(r.exit_code, 3) << r.output;
   const nlohmann::json first = runs_of_checkpoint();
   EXPECT_EQ(first.at("runs").get<int>(), 1);
-  EXPECT_EQ(first.at("untimed_probes").get<int>(), 0);
+  EXPECT_EQ(first.at("untimed").get<int>(), 0);
   EXPECT_GT(first.at("busy_seconds").get<double>(), 0.0);
   EXPECT_GE(first.at("wall_seconds").get<double>(), first.at("busy_seconds").get<double>());  // one thread
   r = run_tool(cmd + " --partial " + q(part));
@@ -297,7 +297,7 @@ TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
   const nlohmann::json s = read_json_file(out / "probe_summary.json");
   const nlohmann::json& all = s.at("all_runs");
   EXPECT_EQ(all.at("runs").get<int>(), 3);
-  EXPECT_EQ(all.at("untimed_probes").get<int>(), 0);
+  EXPECT_EQ(all.at("untimed").get<int>(), 0);
   ASSERT_EQ(s.at("ranks").size(), 1u);
   const double last_busy = s.at("ranks")[0].at("busy_seconds").get<double>();
   EXPECT_NEAR(all.at("busy_seconds").get<double>(), second.at("busy_seconds").get<double>() + last_busy, 1e-9);
@@ -307,7 +307,7 @@ TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
   // A checkpoint without the record (written before it was kept, or with it damaged) resumes
   // as before; its probes are counted as untimed.
   for (const nlohmann::json bad : {nlohmann::json(nullptr), nlohmann::json("x"),
-                                   nlohmann::json{{"runs", -1}, {"wall_seconds", 1}, {"busy_seconds", 1}, {"untimed_probes", 0}}}) {
+                                   nlohmann::json{{"runs", -1}, {"wall_seconds", 1}, {"busy_seconds", 1}, {"untimed", 0}}}) {
     const fs::path again = root_ / "again";
     fs::remove_all(again);
     fs::create_directories(again);
@@ -322,7 +322,7 @@ TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
     EXPECT_NE(r.output.find("2 probes from a checkpoint that did not record its time"), std::string::npos) << r.output;
     const nlohmann::json a = read_json_file(again / "probe_summary.json").at("all_runs");
     EXPECT_EQ(a.at("runs").get<int>(), 1) << bad;
-    EXPECT_EQ(a.at("untimed_probes").get<int>(), 2) << bad;
+    EXPECT_EQ(a.at("untimed").get<int>(), 2) << bad;
     EXPECT_EQ(read_file(again / "probes.csv"), read_file(out / "probes.csv"));
   }
 }

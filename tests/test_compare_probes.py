@@ -360,7 +360,7 @@ class ComparePairs(unittest.TestCase):
         # run's ranks over all its probes.
         def resumed(s):
             s["all_runs"] = {"runs": 3, "wall_seconds": 100.0, "busy_seconds": 90.0,
-                             "untimed_probes": 2}
+                             "untimed": 2}
             s["ranks"] = [{"rank": 0, "threads": 1, "probes": 4, "busy_seconds": 7.0}]
 
         def older(s):

@@ -269,7 +269,7 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   }
   const nlohmann::json all = nlohmann::json::parse(read_file(out / "probe_summary.json")).at("all_runs");
   EXPECT_EQ(all.at("runs").get<int>(), 3);
-  EXPECT_EQ(all.at("untimed_probes").get<int>(), 0);
+  EXPECT_EQ(all.at("untimed").get<int>(), 0);
   EXPECT_NEAR(all.at("busy_seconds").get<double>(), busy, 1e-9);
   const fs::path file_2 = out / "probe_shard-2-of-3.json";
   auto shard_2 = nlohmann::json::parse(read_file(file_2));
@@ -278,7 +278,7 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   ASSERT_EQ(shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'")).exit_code, 0);
   const nlohmann::json old = nlohmann::json::parse(read_file(out / "probe_summary.json")).at("all_runs");
   EXPECT_EQ(old.at("runs").get<int>(), 2);
-  EXPECT_EQ(old.at("untimed_probes").get<int>(), rows_2);
+  EXPECT_EQ(old.at("untimed").get<int>(), rows_2);
   EXPECT_GT(rows_2, 0);
 }
 
@@ -325,9 +325,23 @@ TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {
   for (const auto& v : saved.at("fn_max")) known += !v.is_null();
   EXPECT_GE(known, 40);
   EXPECT_LT(known, 81);
+  // The checkpoint records the stopped run's time; bounds.json all the runs' (docs/probe.md,
+  // "Campaigns": the time of every run), over 2 and then 3 ranks.
+  const nlohmann::json first = saved.at("runs");
+  EXPECT_EQ(first.at("runs").get<int>(), 1);
+  EXPECT_EQ(first.at("untimed").get<int>(), 0);
+  EXPECT_GT(first.at("busy_seconds").get<double>(), 0.0);
   bounds("resumed", 3, "", 0);
   EXPECT_FALSE(fs::exists(out / "bounds_checkpoint.json"));
   EXPECT_EQ(read_file(one / "bounds.csv"), read_file(out / "bounds.csv"));
+  const auto summary = nlohmann::json::parse(read_file(out / "bounds.json"));
+  const nlohmann::json& all = summary.at("all_runs");
+  EXPECT_EQ(all.at("runs").get<int>(), 2);
+  EXPECT_EQ(all.at("untimed").get<int>(), 0);
+  double last = 0.0;
+  for (const auto& r : summary.at("ranks")) last += r.at("busy_seconds").get<double>();
+  EXPECT_NEAR(all.at("busy_seconds").get<double>(), first.at("busy_seconds").get<double>() + last, 1e-9);
+  EXPECT_EQ(nlohmann::json::parse(read_file(one / "bounds.json")).at("all_runs").at("runs").get<int>(), 1);
 }
 
 TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
@@ -347,6 +361,7 @@ TEST_F(Distributed, BoundsOverRanksAndShardsWriteTheBytesOfOneProcess) {
   EXPECT_EQ(one, read_file(root_ / "shards" / "bounds.csv"));
   const auto ranks = nlohmann::json::parse(read_file(root_ / "three" / "bounds.json")).at("ranks");
   EXPECT_EQ(ranks.size(), 3u);
+  EXPECT_EQ(nlohmann::json::parse(read_file(root_ / "shards" / "bounds.json")).at("all_runs").at("runs").get<int>(), 2);
 }
 
 }  // namespace

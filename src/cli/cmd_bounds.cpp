@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "unjam/campaign/distributor.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/campaign_time.hpp"
 #include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
@@ -55,6 +57,7 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 struct BoundsRun {
   double t_build = 0.0, t_rank = 0.0, t_total = 0.0;
   std::vector<RankLoad> loads;
+  CampaignTime all_runs;  // every run that made the bounds (stopped and resumed), this one's included
 };
 
 ForceBoundsOptions lp_options(const BoundsOptions& opt, int Nc) {
@@ -126,6 +129,7 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
        {{"read_and_build", run.t_build}, {"rank", run.t_rank}, {"lp", bounds.seconds},
         {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", run.t_total}}},
       {"ranks", rank_loads_json<nlohmann::ordered_json>(run.loads, "lps")},
+      {"all_runs", to_json(run.all_runs)},
   };
 }
 
@@ -154,6 +158,13 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
                 bounds.loosened_solves);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
+  if (run.all_runs.runs > 1 || run.all_runs.untimed > 0) {
+    std::printf("over %d runs        %s of wall time, %s busy", run.all_runs.runs,
+                format_duration(run.all_runs.wall_seconds).c_str(), format_duration(run.all_runs.busy_seconds).c_str());
+    if (run.all_runs.untimed > 0)
+      std::printf(" (%lld LP values from a checkpoint that did not record its time)", run.all_runs.untimed);
+    std::printf("\n");
+  }
   if (run.loads.size() > 1)
     for (const RankLoad& l : run.loads)
       std::printf("  rank %d: %lld LPs, %s busy (%d threads)\n", l.rank, l.tasks,
@@ -182,7 +193,8 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
       {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max},
       {"min_lps_skipped", b.min_lps_skipped}, {"iterations", b.iterations},
       {"loosened_solves", b.loosened_solves}, {"lp_seconds", b.seconds},
-      {"busy_seconds", run.loads.at(0).busy_seconds}, {"command", command_line()}};
+      {"busy_seconds", run.loads.at(0).busy_seconds}, {"all_runs", to_json(run.all_runs)},
+      {"command", command_line()}};
   const std::filesystem::path file = output_dir(opt) / shard_file_name("bounds_shard", shard, shards);
   write_file_atomic(file, j.dump());
   std::printf("shard %d/%d: %zu contacts -> %s (merge the shards with `unjam merge`)\n", shard,
@@ -212,8 +224,16 @@ nlohmann::json checkpoint_settings(const BoundsOptions& opt, const Packing& pack
           {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"shard", opt.shard}, {"contacts", Nc}};
 }
 
-// The partial result saved in `file`, if there is one (and it is of this run).
-std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings) {
+// The LP values a partial result holds (fn_min and fn_max known).
+long long known_values(const ForceBounds& b) {
+  return static_cast<long long>((b.fn_min.array() == b.fn_min.array()).count() +
+                                (b.fn_max.array() == b.fn_max.array()).count());
+}
+
+// The partial result saved in `file`, if there is one (and it is of this run), and the time
+// of the runs that made it (`earlier`; its untimed: the LP values of a checkpoint without it).
+std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings,
+                                           CampaignTime& earlier) {
   if (!std::filesystem::exists(file)) return std::nullopt;
   const auto j = nlohmann::json::parse(read_file(file), nullptr, false);
   if (j.is_discarded()) throw Error(file.string() + " is not valid JSON; remove it to start over");
@@ -225,21 +245,27 @@ std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, co
   b.iterations = j.at("iterations").get<long long>();
   b.loosened_solves = j.at("loosened_solves").get<long long>();
   b.complete = false;
+  earlier = campaign_time_of_checkpoint(j, known_values(b));
   return b;
 }
 
-void write_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings, const ForceBounds& b) {
+// The checkpoint, with the time of the runs so far (`runs`).
+void write_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings, const ForceBounds& b,
+                      const CampaignTime& runs) {
   write_file_atomic(file, nlohmann::json{{"settings", settings}, {"fn_min", values_json(b.fn_min)},
                                          {"fn_max", values_json(b.fn_max)}, {"min_lps_skipped", b.min_lps_skipped},
-                                         {"iterations", b.iterations}, {"loosened_solves", b.loosened_solves}}
+                                         {"iterations", b.iterations}, {"loosened_solves", b.loosened_solves},
+                                         {"runs", to_json(runs)}}
                               .dump());
 }
 
-// On the gathering process: resume from the checkpoint, save one every opt.checkpoint_s
-// seconds, stop on Ctrl-C / SIGTERM or after opt.stop_after LPs.
+// On the gathering process: resume from the checkpoint (and the time of its runs, `earlier`),
+// save one every opt.checkpoint_s seconds with the runs' time so far (`time_so_far`), stop
+// on Ctrl-C / SIGTERM or after opt.stop_after LPs.
 void add_checkpoints(const BoundsOptions& opt, const std::filesystem::path& file, const nlohmann::json& settings,
-                     std::optional<ForceBounds>& resumed, ForceBoundsOptions& lp) {
-  resumed = read_checkpoint(file, settings);
+                     std::optional<ForceBounds>& resumed, CampaignTime& earlier,
+                     const std::function<CampaignTime()>& time_so_far, ForceBoundsOptions& lp) {
+  resumed = read_checkpoint(file, settings, earlier);
   if (resumed) {
     lp.resume = &*resumed;
     std::fprintf(stderr, "resuming from %s\n", file.c_str());
@@ -248,11 +274,11 @@ void add_checkpoints(const BoundsOptions& opt, const std::filesystem::path& file
   lp.should_stop = [&opt, solved] {
     return InterruptGuard::requested() || (opt.stop_after > 0 && *solved >= opt.stop_after);
   };
-  lp.checkpoint = [&opt, file, settings, solved, last = std::chrono::steady_clock::now()](const ForceBounds& b) mutable {
+  lp.checkpoint = [&opt, file, settings, solved, time_so_far, last = std::chrono::steady_clock::now()](const ForceBounds& b) mutable {
     ++*solved;
     if (seconds_since(last) < opt.checkpoint_s && !InterruptGuard::requested()) return;
     last = std::chrono::steady_clock::now();
-    write_checkpoint(file, settings, b);
+    write_checkpoint(file, settings, b, time_so_far());
   };
 }
 
@@ -276,7 +302,17 @@ void run_bounds(const BoundsOptions& opt) {
   const std::filesystem::path checkpoint = checkpoint_path(opt, shard, shards);
   const nlohmann::json settings = checkpoint_settings(opt, packing, sys.num_contacts());
   std::optional<ForceBounds> resumed;
-  if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, lp);
+  CampaignTime earlier;
+  // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
+  // distributor has them; the checkpoint hook runs within the gathering, under its lock).
+  const auto time_so_far = [&] {
+    CampaignTime now;
+    now.runs = 1;
+    now.wall_seconds = seconds_since(t_start);
+    for (const RankLoad& l : dist->loads()) now.busy_seconds += l.busy_seconds;
+    return earlier + now;
+  };
+  if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, earlier, time_so_far, lp);
   else lp.should_stop = InterruptGuard::requested;
   ForceBounds bounds;
   {
@@ -285,11 +321,12 @@ void run_bounds(const BoundsOptions& opt) {
   }
   if (!dist->gathers()) return;
   if (!bounds.complete) {
-    write_checkpoint(checkpoint, settings, bounds);
+    write_checkpoint(checkpoint, settings, bounds, time_so_far());
     throw Interrupted("stopped (" + checkpoint.string() + " saved); run the same command again to resume");
   }
   std::filesystem::remove(checkpoint);
   run.loads = dist->loads();
+  run.all_runs = time_so_far();
   if (shards > 1) return write_bounds_shard(opt, shard, shards, bounds, run);
   const auto t_rank = std::chrono::steady_clock::now();
   const RankInfo rank = equilibrium_rank(sys);
@@ -358,6 +395,9 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
     bounds.seconds = std::max(bounds.seconds, j.at("lp_seconds").get<double>());
     run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
                          j.at("busy_seconds").get<double>()});
+    // every shard's runs (a shard written before they were recorded: its 2 x contacts LP values untimed)
+    run.all_runs = run.all_runs + campaign_time_of_checkpoint({{"runs", j.value("all_runs", nlohmann::json())}},
+                                                              2 * static_cast<long long>(contacts.size()));
   }
   if (bounds.fn_max.hasNaN()) throw Error("the bounds shards in " + dir + " do not cover every contact");
   const auto t_rank = std::chrono::steady_clock::now();

@@ -227,7 +227,7 @@ std::optional<FitWindow> fit_window(const ProbeOptions& o) {
 }
 
 // The time of a campaign's run for its summary: this run's wall time and ranks, and every
-// run's (CampaignTime, probe/campaign_run).
+// run's (CampaignTime, core/campaign_time).
 struct RunTime {
   double wall = 0.0;
   std::vector<RankLoad> loads;
@@ -424,17 +424,17 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   else
     std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
   const CampaignTime& all = time.all_runs;
-  if (all.runs > 1 || all.untimed_probes > 0 || planned > 0) {
+  if (all.runs > 1 || all.untimed > 0 || planned > 0) {
     std::printf("  over %d run%s: %s of wall time, %s busy", all.runs, all.runs == 1 ? "" : "s",
                 format_duration(all.wall_seconds).c_str(), format_duration(all.busy_seconds).c_str());
-    const long long timed = static_cast<long long>(sum.probes) - all.untimed_probes;
+    const long long timed = static_cast<long long>(sum.probes) - all.untimed;
     if (timed > 0) {
       std::printf(" (%s per probe", format_duration(all.busy_seconds / static_cast<double>(timed)).c_str());
-      if (all.untimed_probes > 0) std::printf(" over the %lld timed", timed);
+      if (all.untimed > 0) std::printf(" over the %lld timed", timed);
       std::printf(")");
     }
-    if (all.untimed_probes > 0)
-      std::printf("; %lld probes from a checkpoint that did not record its time", all.untimed_probes);
+    if (all.untimed > 0)
+      std::printf("; %lld probes from a checkpoint that did not record its time", all.untimed);
     std::printf("\n");
   }
   if (loads.size() > 1)

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 
 #include "unjam/core/atomic_file.hpp"
 
@@ -10,35 +9,6 @@ namespace unjam {
 
 CampaignState empty_campaign_state(const Packing& packing) {
   return CampaignState(ResponseGrid::for_cell(packing.cell, 2.0 * packing.mean_radius()));
-}
-
-CampaignTime operator+(const CampaignTime& a, const CampaignTime& b) {
-  return {a.runs + b.runs, a.wall_seconds + b.wall_seconds, a.busy_seconds + b.busy_seconds,
-          a.untimed_probes + b.untimed_probes};
-}
-
-nlohmann::json to_json(const CampaignTime& t) {
-  return {{"runs", t.runs}, {"wall_seconds", t.wall_seconds}, {"busy_seconds", t.busy_seconds},
-          {"untimed_probes", t.untimed_probes}};
-}
-
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes) {
-  CampaignTime untimed;
-  untimed.untimed_probes = probes;
-  const auto runs = checkpoint.find("runs");
-  if (runs == checkpoint.end() || !runs->is_object()) return untimed;
-  const auto number = [&](const char* key, double& to) {
-    const auto it = runs->find(key);
-    if (it == runs->end() || !it->is_number()) return false;
-    to = it->get<double>();
-    return std::isfinite(to) && to >= 0.0;
-  };
-  double n = 0.0, wall = 0.0, busy = 0.0, u = 0.0;
-  if (!number("runs", n) || !number("wall_seconds", wall) || !number("busy_seconds", busy) ||
-      !number("untimed_probes", u) || n != std::floor(n) || n > 1e9 || u != std::floor(u) ||
-      u > static_cast<double>(probes))
-    return untimed;
-  return {static_cast<int>(n), wall, busy, static_cast<long long>(u)};
 }
 
 SavedCampaign load_campaign_checkpoint(const std::filesystem::path& checkpoint, const Packing& packing,

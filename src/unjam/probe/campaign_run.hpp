@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "unjam/analysis/packing_stats.hpp"
+#include "unjam/core/campaign_time.hpp"
 #include "unjam/core/work_source.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/probe_campaign.hpp"
@@ -20,23 +21,6 @@ namespace unjam {
 // A campaign's state before any probe: no rows, averages on the packing's grid
 // (ResponseGrid::for_cell(cell, 2 <R>)).
 CampaignState empty_campaign_state(const Packing& packing);
-
-// The time a campaign's probes took over the runs that made them (docs/probe.md,
-// "Campaigns"), as its checkpoint records it ("runs"): how many runs, their wall time and their
-// busy seconds (RankLoad::busy_seconds summed over ranks), each run counted to its last save
-// (a run killed without its final save, to its last periodic one). untimed_probes: probes of a
-// checkpoint that did not record it (written before it was, or with the record damaged).
-struct CampaignTime {
-  int runs = 0;
-  double wall_seconds = 0.0;
-  double busy_seconds = 0.0;
-  long long untimed_probes = 0;
-};
-CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
-nlohmann::json to_json(const CampaignTime& t);
-// The record of a checkpoint's text (its "runs"); a checkpoint of `probes` probes without a
-// valid one has them all untimed. Never throws: the record is not part of the state.
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes);
 
 struct SavedCampaign {
   std::optional<CampaignState> state;  // the saved state, if the file belongs to this run

@@ -188,7 +188,7 @@ CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p
 // A probe checkpoint as `unjam probe --all` saves it: the packing's fingerprint
 // (packing_fingerprint, passed in as computing it costs O(N)), the settings (to_json), the state and the FNV-1a hash of its dump.
 // `runs`, if not null, is stored beside them as "runs": the time the runs so far took
-// (campaign_run's CampaignTime); it is outside the hashed state.
+// (CampaignTime, core/campaign_time); it is outside the hashed state.
 std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
                                      const CampaignState& state, const nlohmann::json& runs = nullptr);
 

@@ -1,0 +1,36 @@
+#include "unjam/core/campaign_time.hpp"
+
+#include <cmath>
+
+namespace unjam {
+
+CampaignTime operator+(const CampaignTime& a, const CampaignTime& b) {
+  return {a.runs + b.runs, a.wall_seconds + b.wall_seconds, a.busy_seconds + b.busy_seconds,
+          a.untimed + b.untimed};
+}
+
+nlohmann::json to_json(const CampaignTime& t) {
+  return {{"runs", t.runs}, {"wall_seconds", t.wall_seconds}, {"busy_seconds", t.busy_seconds},
+          {"untimed", t.untimed}};
+}
+
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes) {
+  CampaignTime untimed;
+  untimed.untimed = probes;
+  const auto runs = checkpoint.find("runs");
+  if (runs == checkpoint.end() || !runs->is_object()) return untimed;
+  const auto number = [&](const char* key, double& to) {
+    const auto it = runs->find(key);
+    if (it == runs->end() || !it->is_number()) return false;
+    to = it->get<double>();
+    return std::isfinite(to) && to >= 0.0;
+  };
+  double n = 0.0, wall = 0.0, busy = 0.0, u = 0.0;
+  if (!number("runs", n) || !number("wall_seconds", wall) || !number("busy_seconds", busy) ||
+      !number("untimed", u) || n != std::floor(n) || n > 1e9 || u != std::floor(u) ||
+      u > static_cast<double>(probes))
+    return untimed;
+  return {static_cast<int>(n), wall, busy, static_cast<long long>(u)};
+}
+
+}  // namespace unjam

@@ -1,0 +1,25 @@
+#pragma once
+// The time of a campaign made over several runs (stopped and resumed): `unjam probe` and
+// `unjam bounds` record it in their checkpoints and outputs.
+#include <nlohmann/json.hpp>
+
+namespace unjam {
+
+// The time a campaign's tasks (probes, LPs) took over the runs that made them (docs/probe.md,
+// "Campaigns"), as its checkpoint records it ("runs"): how many runs, their wall time and their
+// busy seconds (RankLoad::busy_seconds summed over ranks), each run counted to its last save
+// (a run killed without its final save, to its last periodic one). untimed: tasks of a
+// checkpoint that did not record it (written before it was, or with the record damaged).
+struct CampaignTime {
+  int runs = 0;
+  double wall_seconds = 0.0;
+  double busy_seconds = 0.0;
+  long long untimed = 0;
+};
+CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
+nlohmann::json to_json(const CampaignTime& t);
+// The record of a checkpoint (its "runs"); a checkpoint of `probes` tasks without a valid one
+// has them all untimed. Never throws: the record is not part of the state.
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes);
+
+}  // namespace unjam
