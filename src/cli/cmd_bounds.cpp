@@ -305,13 +305,7 @@ void run_bounds(const BoundsOptions& opt) {
   CampaignTime earlier;
   // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
   // distributor has them; the checkpoint hook runs within the gathering, under its lock).
-  const auto time_so_far = [&] {
-    CampaignTime now;
-    now.runs = 1;
-    now.wall_seconds = seconds_since(t_start);
-    for (const RankLoad& l : dist->loads()) now.busy_seconds += l.busy_seconds;
-    return earlier + now;
-  };
+  const auto time_so_far = [&] { return earlier + one_run(seconds_since(t_start), dist->loads()); };
   if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, earlier, time_so_far, lp);
   else lp.should_stop = InterruptGuard::requested;
   ForceBounds bounds;

@@ -9,6 +9,14 @@ CampaignTime operator+(const CampaignTime& a, const CampaignTime& b) {
           a.untimed + b.untimed};
 }
 
+CampaignTime one_run(double wall, const std::vector<RankLoad>& loads) {
+  CampaignTime t;
+  t.runs = 1;
+  t.wall_seconds = wall;
+  for (const RankLoad& l : loads) t.busy_seconds += l.busy_seconds;
+  return t;
+}
+
 nlohmann::json to_json(const CampaignTime& t) {
   return {{"runs", t.runs}, {"wall_seconds", t.wall_seconds}, {"busy_seconds", t.busy_seconds},
           {"untimed", t.untimed}};

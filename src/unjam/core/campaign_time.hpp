@@ -1,7 +1,11 @@
 #pragma once
 // The time of a campaign made over several runs (stopped and resumed): `unjam probe` and
 // `unjam bounds` record it in their checkpoints and outputs.
+#include <vector>
+
 #include <nlohmann/json.hpp>
+
+#include "unjam/core/work_source.hpp"
 
 namespace unjam {
 
@@ -17,6 +21,9 @@ struct CampaignTime {
   long long untimed = 0;
 };
 CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
+// One run so far: `wall` seconds since it started and its ranks' busy seconds (their loads as
+// the distributor has them).
+CampaignTime one_run(double wall, const std::vector<RankLoad>& loads);
 nlohmann::json to_json(const CampaignTime& t);
 // The record of a checkpoint (its "runs"); a checkpoint of `probes` tasks without a valid one
 // has them all untimed. Never throws: the record is not part of the state.

@@ -41,13 +41,7 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   const std::size_t done_before = state.rows.size();
   // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
   // distributor has them: within the gathering, where every rank's load is updated).
-  const auto time_so_far = [&] {
-    CampaignTime now;
-    now.runs = 1;
-    now.wall_seconds = seconds(t0);
-    for (const RankLoad& l : distributor.loads()) now.busy_seconds += l.busy_seconds;
-    return options.earlier + now;
-  };
+  const auto time_so_far = [&] { return options.earlier + one_run(seconds(t0), distributor.loads()); };
   const auto save = [&](const CampaignState& st) {
     write_file_atomic(options.checkpoint,
                       campaign_checkpoint_text(options.fingerprint, options.settings, st, to_json(time_so_far())));
