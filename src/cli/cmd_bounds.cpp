@@ -159,7 +159,7 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
   if (run.all_runs.runs > 1 || run.all_runs.untimed > 0) {
-    std::printf("over %d runs        %s of wall time, %s busy", run.all_runs.runs,
+    std::printf("over %d run%s       %s of wall time, %s busy", run.all_runs.runs, run.all_runs.runs == 1 ? " " : "s",
                 format_duration(run.all_runs.wall_seconds).c_str(), format_duration(run.all_runs.busy_seconds).c_str());
     if (run.all_runs.untimed > 0)
       std::printf(" (%lld LP values from a checkpoint that did not record its time)", run.all_runs.untimed);

@@ -22,9 +22,9 @@ nlohmann::json to_json(const CampaignTime& t) {
           {"untimed", t.untimed}};
 }
 
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes) {
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long tasks) {
   CampaignTime untimed;
-  untimed.untimed = probes;
+  untimed.untimed = tasks;
   const auto runs = checkpoint.find("runs");
   if (runs == checkpoint.end() || !runs->is_object()) return untimed;
   const auto number = [&](const char* key, double& to) {
@@ -36,7 +36,7 @@ CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long 
   double n = 0.0, wall = 0.0, busy = 0.0, u = 0.0;
   if (!number("runs", n) || !number("wall_seconds", wall) || !number("busy_seconds", busy) ||
       !number("untimed", u) || n != std::floor(n) || n > 1e9 || u != std::floor(u) ||
-      u > static_cast<double>(probes))
+      u > static_cast<double>(tasks))
     return untimed;
   return {static_cast<int>(n), wall, busy, static_cast<long long>(u)};
 }

@@ -25,8 +25,8 @@ CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
 // the distributor has them).
 CampaignTime one_run(double wall, const std::vector<RankLoad>& loads);
 nlohmann::json to_json(const CampaignTime& t);
-// The record of a checkpoint (its "runs"); a checkpoint of `probes` tasks without a valid one
+// The record of a checkpoint (its "runs"); a checkpoint of `tasks` tasks without a valid one
 // has them all untimed. Never throws: the record is not part of the state.
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long probes);
+CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long tasks);
 
 }  // namespace unjam
