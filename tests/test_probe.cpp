@@ -332,11 +332,13 @@ TEST(ProbeCampaign, RunningProbesReportThemselvesAndTheirResultsStayTheSame) {
 
   std::mutex mutex;
   std::map<int, std::vector<double>> calls;  // contact -> its seconds, in order
+  std::map<int, std::vector<long long>> polls;  // contact -> its polls so far, in order
   CampaignHooks every_poll;
   every_poll.running_every_s = 0.0;
-  every_poll.running = [&](int contact, double seconds) {
+  every_poll.running = [&](int contact, double seconds, long long n) {
     const std::lock_guard lock(mutex);
     calls[contact].push_back(seconds);
+    polls[contact].push_back(n);
   };
   CampaignState reported(grid);
   ASSERT_TRUE(run_campaign(p, s, reported, every_poll));
@@ -345,7 +347,11 @@ TEST(ProbeCampaign, RunningProbesReportThemselvesAndTheirResultsStayTheSame) {
     ASSERT_EQ(calls.count(k), 1u) << "contact " << k;
     EXPECT_TRUE(std::is_sorted(calls[k].begin(), calls[k].end())) << "contact " << k;
     EXPECT_GE(calls[k].front(), 0.0);
+    // Every poll reports (interval 0): the polls count 1, 2, 3, ...
+    for (std::size_t i = 0; i < polls[k].size(); ++i) EXPECT_EQ(polls[k][i], static_cast<long long>(i) + 1);
   }
+  // A cd probe polls before every piece of every path: at least the pieces of the path it returns.
+  for (const ProbeRow& r : plain.rows) EXPECT_GE(polls[r.contact].back(), r.sweeps) << "contact " << r.contact;
 
   calls.clear();
   CampaignHooks never = every_poll;

@@ -240,18 +240,24 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
                  const CampaignState& state, const RunTime& time, const fs::path& file);
 
 // A sign of life of probes that run for minutes to hours (cd at 2000 disks and more), every
-// CampaignHooks::running_every_s of a probe on stderr; none with --quiet.
-std::function<void(int, double)> running_printer(const ProbeOptions& o, const WorkDistributor& dist) {
+// CampaignHooks::running_every_s of a probe on stderr, with its work so far (cd: its polls
+// are its pieces, over all its paths; nlgs: 16 sweeps each); none with --quiet.
+std::function<void(int, double, long long)> running_printer(const ProbeOptions& o, const WorkDistributor& dist) {
   if (o.quiet) return {};
   const std::string rank = dist.ranks() > 1 ? "rank " + std::to_string(dist.rank()) + ": " : "";
-  return [rank](int contact, double seconds) {
-    std::fprintf(stderr, "  %scontact %d: probing for %s\n", rank.c_str(), contact, format_duration(seconds).c_str());
+  const std::string method = o.method;
+  return [rank, method](int contact, double seconds, long long polls) {
+    const std::string work = method == "cd"     ? " (" + std::to_string(polls) + " pieces so far)"
+                             : method == "nlgs" ? " (~" + std::to_string(16 * polls) + " sweeps so far)"
+                                                : "";
+    std::fprintf(stderr, "  %scontact %d: probing for %s%s\n", rank.c_str(), contact,
+                 format_duration(seconds).c_str(), work.c_str());
   };
 }
 
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
 void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist,
-                const std::function<void(int, double)>& running) {
+                const std::function<void(int, double, long long)>& running) {
   CampaignState unused = empty_campaign_state(p);
   CampaignHooks hooks;
   hooks.running = running;

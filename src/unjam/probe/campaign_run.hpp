@@ -47,7 +47,7 @@ struct CheckpointedCampaignOptions {
   // After every gathered probe: (done, total, elapsed s, ETA s; -1 unknown). May be empty.
   std::function<void(int, int, double, double)> progress;
   // CampaignHooks::running and its interval: a sign of life of long probes. May be empty.
-  std::function<void(int contact, double seconds)> running;
+  std::function<void(int contact, double seconds, long long polls)> running;
   double running_every_s = 300.0;
   CampaignTime earlier;  // of the runs before this one (SavedCampaign::time)
 };

@@ -106,14 +106,16 @@ ProbeResult decode(const std::string& bytes) {
 
 // s with its probes' cancel also calling `running` (CampaignHooks::running) every `every`
 // seconds of the probe of contact k.
-CampaignSettings with_running(const CampaignSettings& s, int k, const std::function<void(int, double)>& running,
-                              double every) {
+CampaignSettings with_running(const CampaignSettings& s, int k,
+                              const std::function<void(int, double, long long)>& running, double every) {
   CampaignSettings st = s;
   using clock = std::chrono::steady_clock;
-  st.nlgs.cancel = [cancel = s.nlgs.cancel, &running, k, every, t0 = clock::now(), next = every]() mutable {
+  st.nlgs.cancel = [cancel = s.nlgs.cancel, &running, k, every, t0 = clock::now(), next = every,
+                    polls = 0LL]() mutable {
+    ++polls;
     const double seconds = std::chrono::duration<double>(clock::now() - t0).count();
     if (seconds >= next) {
-      running(k, seconds);
+      running(k, seconds, polls);
       next = every > 0.0 ? every * (std::floor(seconds / every) + 1.0) : seconds;
     }
     return cancel && cancel();
@@ -127,7 +129,7 @@ CampaignSettings with_running(const CampaignSettings& s, int k, const std::funct
 // that s.nlgs.cancel abandons comes back cancelled (work_off). `running` (may be empty): see
 // CampaignHooks::running.
 void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s,
-                 const std::vector<int>* contacts, const std::function<void(int, double)>& running = {},
+                 const std::vector<int>* contacts, const std::function<void(int, double, long long)>& running = {},
                  double running_every_s = 0.0) {
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;

@@ -96,8 +96,9 @@ struct CampaignHooks {
   std::function<bool()> cancel;
   // A sign of life of long probes: called from a running probe's thread (nlgs, lemke and cd,
   // where they poll cancel) each time another `running_every_s` seconds of it have passed,
-  // with its contact and its seconds so far (wall time). Thread safe; may be empty.
-  std::function<void(int contact, double seconds)> running;
+  // with its contact, its seconds so far (wall time) and its polls so far (cd: one before
+  // every piece of every path; nlgs: one per 16 sweeps). Thread safe; may be empty.
+  std::function<void(int contact, double seconds, long long polls)> running;
   double running_every_s = 300.0;
 };
 
