@@ -4,7 +4,7 @@
 // the hash). Every input must end in unjam::Error, in "another packing" (nullopt), or in a
 // state run_campaign could have made on the packing that saves and reloads unchanged; a
 // crash, a sanitizer report, a timeout or another exception fails. Its record of the runs'
-// time (campaign_time_of_checkpoint) is read from any JSON object without throwing, and is
+// time (campaign_time_from_json of its "runs") is read from any JSON object without throwing, and is
 // either a valid one or none (every probe untimed).
 #include <cmath>
 #include <cstdint>
@@ -57,7 +57,7 @@ std::vector<std::string> seeds() {
   time.wall_seconds = 12.5;
   time.busy_seconds = 11.0;
   time.untimed = 1;
-  out.push_back(unjam::campaign_checkpoint_text(fingerprint, settings(), state, unjam::to_json(time)));
+  out.push_back(unjam::campaign_checkpoint_text(fingerprint, settings(), state, &time));
   return out;
 }
 
@@ -109,7 +109,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_object()) {
     const long long probes = 3;
-    const unjam::CampaignTime t = unjam::campaign_time_of_checkpoint(j, probes);
+    const unjam::CampaignTime t = unjam::campaign_time_from_json(j.value("runs", nlohmann::json()), probes);
     const bool valid = t.runs >= 0 && std::isfinite(t.wall_seconds) && t.wall_seconds >= 0.0 &&
                        std::isfinite(t.busy_seconds) && t.busy_seconds >= 0.0 && t.untimed >= 0 &&
                        t.untimed <= probes;

@@ -245,7 +245,7 @@ std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, co
   b.iterations = j.at("iterations").get<long long>();
   b.loosened_solves = j.at("loosened_solves").get<long long>();
   b.complete = false;
-  earlier = campaign_time_of_checkpoint(j, known_values(b));
+  earlier = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(b));
   return b;
 }
 
@@ -390,8 +390,8 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
     run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
                          j.at("busy_seconds").get<double>()});
     // every shard's runs (a shard written before they were recorded: its 2 x contacts LP values untimed)
-    run.all_runs = run.all_runs + campaign_time_of_checkpoint({{"runs", j.value("all_runs", nlohmann::json())}},
-                                                              2 * static_cast<long long>(contacts.size()));
+    run.all_runs = run.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
+                                                          2 * static_cast<long long>(contacts.size()));
   }
   if (bounds.fn_max.hasNaN()) throw Error("the bounds shards in " + dir + " do not cover every contact");
   const auto t_rank = std::chrono::steady_clock::now();

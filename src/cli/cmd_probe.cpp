@@ -307,12 +307,11 @@ void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& chec
   if (!fs::exists(checkpoint))
     throw Error("no checkpoint of this campaign in " + out.string() + " (" + checkpoint.filename().string() +
                 "): it has not started, or it has finished and written its outputs there");
-  const std::string text = read_file(checkpoint);
-  const std::optional<CampaignState> state = read_campaign_checkpoint(text, checkpoint.string(), p, settings);
+  RunTime time;  // this run's: none; the runs' so far: the checkpoint's record
+  const std::optional<CampaignState> state =
+      read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings, &time.all_runs);
   if (!state) throw Error(checkpoint.string() + " was saved from another packing than " + o.dir);
   const DirLock lock(dir, command_line());
-  RunTime time;  // this run's: none; the runs' so far: the checkpoint's record
-  time.all_runs = campaign_time_of_checkpoint(nlohmann::json::parse(text), static_cast<long long>(state->rows.size()));
   finish_campaign(o, p, settings, *state, time, dir, planned);
 }
 
@@ -506,8 +505,8 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
     for (const auto& l : j.at("ranks")) load.busy_seconds += l.at("busy_seconds").get<double>();
     time.loads.push_back(load);
     // every shard's runs (a shard written before they were recorded: its probes untimed)
-    time.all_runs = time.all_runs + campaign_time_of_checkpoint({{"runs", j.value("all_runs", nlohmann::json())}},
-                                                                static_cast<long long>(part.rows.size()));
+    time.all_runs = time.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
+                                                            static_cast<long long>(part.rows.size()));
   }
   std::sort(state.rows.begin(), state.rows.end(),
             [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });

@@ -22,14 +22,13 @@ nlohmann::json to_json(const CampaignTime& t) {
           {"untimed", t.untimed}};
 }
 
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long tasks) {
+CampaignTime campaign_time_from_json(const nlohmann::json& record, long long tasks) {
   CampaignTime untimed;
   untimed.untimed = tasks;
-  const auto runs = checkpoint.find("runs");
-  if (runs == checkpoint.end() || !runs->is_object()) return untimed;
+  if (!record.is_object()) return untimed;
   const auto number = [&](const char* key, double& to) {
-    const auto it = runs->find(key);
-    if (it == runs->end() || !it->is_number()) return false;
+    const auto it = record.find(key);
+    if (it == record.end() || !it->is_number()) return false;
     to = it->get<double>();
     return std::isfinite(to) && to >= 0.0;
   };

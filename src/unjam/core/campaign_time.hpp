@@ -25,8 +25,9 @@ CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
 // the distributor has them).
 CampaignTime one_run(double wall, const std::vector<RankLoad>& loads);
 nlohmann::json to_json(const CampaignTime& t);
-// The record of a checkpoint (its "runs"); a checkpoint of `tasks` tasks without a valid one
-// has them all untimed. Never throws: the record is not part of the state.
-CampaignTime campaign_time_of_checkpoint(const nlohmann::json& checkpoint, long long tasks);
+// A record as to_json writes it (a checkpoint's "runs", a summary's or shard's "all_runs") of
+// a campaign of `tasks` tasks; a missing (null) or invalid one leaves them all untimed. Never
+// throws: the record is not part of a checkpoint's state.
+CampaignTime campaign_time_from_json(const nlohmann::json& record, long long tasks);
 
 }  // namespace unjam

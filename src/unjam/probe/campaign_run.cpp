@@ -15,12 +15,8 @@ SavedCampaign load_campaign_checkpoint(const std::filesystem::path& checkpoint, 
                                        const nlohmann::json& settings) {
   SavedCampaign saved;
   if (!std::filesystem::exists(checkpoint)) return saved;
-  const std::string text = read_file(checkpoint);
-  saved.state = read_campaign_checkpoint(text, checkpoint.string(), packing, settings);
-  if (saved.state) {
-    saved.time = campaign_time_of_checkpoint(nlohmann::json::parse(text), static_cast<long long>(saved.state->rows.size()));
-    return saved;
-  }
+  saved.state = read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), packing, settings, &saved.time);
+  if (saved.state) return saved;
   saved.set_aside = checkpoint.string() + ".stale";
   rename_file(checkpoint, saved.set_aside);
   return saved;
@@ -42,9 +38,8 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
   // distributor has them: within the gathering, where every rank's load is updated).
   const auto time_so_far = [&] { return options.earlier + one_run(seconds(t0), distributor.loads()); };
-  const auto save = [&](const CampaignState& st) {
-    write_file_atomic(options.checkpoint,
-                      campaign_checkpoint_text(options.fingerprint, options.settings, st, to_json(time_so_far())));
+  const auto save = [&](const CampaignState& st, const CampaignTime& runs) {
+    write_file_atomic(options.checkpoint, campaign_checkpoint_text(options.fingerprint, options.settings, st, &runs));
   };
   CampaignHooks hooks;
   if (options.progress)
@@ -56,7 +51,7 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   hooks.checkpoint = [&](const CampaignState& st) {
     if (seconds(last_checkpoint) < options.checkpoint_s && !interrupted()) return;
     last_checkpoint = clock::now();
-    save(st);
+    save(st, time_so_far());
   };
   hooks.cancel = options.interrupted;
   hooks.running = options.running;
@@ -69,7 +64,7 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   result.finished = run_campaign(packing, settings, state, hooks, distributor);
   result.wall_s = seconds(t0);
   result.time = time_so_far();
-  if (!result.finished) save(state);
+  if (!result.finished) save(state, result.time);
   return result;
 }
 

@@ -134,7 +134,9 @@ void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;
     try {
-      if (running) return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
+      // (the lp probe does not poll: nothing to report, nor a copy of the settings to make)
+      if (running && s.method != ProbeMethod::kLp)
+        return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
       return encode(w.probe(p, s, k));
     } catch (const Cancelled&) {
       throw;
@@ -449,18 +451,19 @@ CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p
 }
 
 std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
-                                     const CampaignState& state, const nlohmann::json& runs) {
+                                     const CampaignState& state, const CampaignTime* runs) {
   const nlohmann::json state_json = to_json(state);
   nlohmann::json j = {{"packing", fingerprint},
                       {"settings", settings},
                       {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
                       {"state", state_json}};
-  if (!runs.is_null()) j["runs"] = runs;
+  if (runs) j["runs"] = to_json(*runs);
   return j.dump();
 }
 
 std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
-                                                      const Packing& p, const nlohmann::json& settings) {
+                                                      const Packing& p, const nlohmann::json& settings,
+                                                      CampaignTime* runs) {
   const auto j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded() || !j.is_object()) throw Error(name + " is not valid JSON; remove it to start over");
   const auto packing = j.find("packing");
@@ -471,7 +474,9 @@ std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, c
   if (state == j.end() || sum == j.end() || *sum != fnv1a64_hex(state->dump()))
     throw Error(name + " is damaged (its state does not match its checksum); remove it to start over");
   try {
-    return campaign_state_from_json(*state, p);
+    CampaignState read = campaign_state_from_json(*state, p);
+    if (runs) *runs = campaign_time_from_json(j.value("runs", nlohmann::json()), static_cast<long long>(read.rows.size()));
+    return read;
   } catch (const Error& e) {
     throw Error(name + ": " + e.what() + "; remove it to start over");
   }

@@ -16,6 +16,7 @@
 
 #include "unjam/analysis/power_law_fit.hpp"
 #include "unjam/analysis/response_average.hpp"
+#include "unjam/core/campaign_time.hpp"
 #include "unjam/core/work_source.hpp"
 #include "unjam/packing/packing.hpp"
 #include "unjam/probe/cd_path.hpp"
@@ -188,16 +189,18 @@ CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p
 
 // A probe checkpoint as `unjam probe --all` saves it: the packing's fingerprint
 // (packing_fingerprint, passed in as computing it costs O(N)), the settings (to_json), the state and the FNV-1a hash of its dump.
-// `runs`, if not null, is stored beside them as "runs": the time the runs so far took
+// `runs`, if given, is stored beside them as "runs": the time the runs so far took
 // (CampaignTime, core/campaign_time); it is outside the hashed state.
 std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
-                                     const CampaignState& state, const nlohmann::json& runs = nullptr);
+                                     const CampaignState& state, const CampaignTime* runs = nullptr);
 
 // The state of a checkpoint's text, if it was saved from `packing` (nullopt if from another
 // packing, or without a fingerprint). Throws unjam::Error (naming `name`) if the text is not a
 // JSON object, the settings differ, the state does not match its hash, or the state does not
-// fit the packing (campaign_state_from_json).
+// fit the packing (campaign_state_from_json). `runs` (may be null): set to the time of the
+// runs that made the state, from the same parse (campaign_time_from_json of its "runs").
 std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
-                                                      const Packing& packing, const nlohmann::json& settings);
+                                                      const Packing& packing, const nlohmann::json& settings,
+                                                      CampaignTime* runs = nullptr);
 
 }  // namespace unjam
