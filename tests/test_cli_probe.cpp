@@ -264,6 +264,48 @@ TEST_F(CliProbe, PartialWritesTheOutputsOfTheCheckpointAndLeavesTheCampaignToRes
   EXPECT_EQ(sp["partial"]["probes_planned"].get<int>(), in_shard);
 }
 
+TEST_F(CliProbe, ASingleProbeSaysItIsRunningEveryRunningEverySeconds) {
+  // `--contact K --method cd --running-every 0`: the line "contact K: probing for T (N pieces
+  // so far)" at every poll of the probe, N = 1, 2, 3, ..., at least the pieces of its path;
+  // none with --quiet or the default interval (a probe of well under 5 min); the field's
+  // bytes are those of a run without the lines; a negative interval is refused.
+  const int k = 3;
+  const auto probe = [&](const std::string& name, const std::string& extra) {
+    const fs::path out = root_ / name;
+    fs::create_directories(out);
+    testing::ToolRun r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+                                  " --method cd --threads 1 --out " + q(out) + " " + extra);
+    return std::pair{r, read_file(out / ("probe-" + std::to_string(k) + ".csv"))};
+  };
+  const auto [every, field_every] = probe("every", "--running-every 0");
+  ASSERT_EQ(every.exit_code, 0) << every.output;
+  const std::string line = "contact " + std::to_string(k) + ": probing for ";
+  long long lines = 0;
+  for (std::size_t at = every.output.find(line); at != std::string::npos; at = every.output.find(line, at + 1)) {
+    const std::size_t open = every.output.find('(', at), end = every.output.find('\n', at);
+    ASSERT_LT(open, end) << every.output.substr(at, end - at);
+    EXPECT_EQ(std::stoll(every.output.substr(open + 1)), ++lines) << every.output.substr(at, end - at);
+    EXPECT_NE(every.output.substr(open, end - open).find("pieces so far)"), std::string::npos);
+  }
+  const double pieces = printed_value(every.output, "sweeps/pivots");
+  EXPECT_GT(pieces, 0.0) << every.output;
+  EXPECT_GE(static_cast<double>(lines), pieces) << every.output;
+
+  const auto [plain, field_plain] = probe("plain", "");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_EQ(plain.output.find(line), std::string::npos) << plain.output;
+  EXPECT_EQ(field_plain, field_every);
+  const auto [quiet, field_quiet] = probe("quiet", "--running-every 0 --quiet");
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find(line), std::string::npos) << quiet.output;
+  EXPECT_EQ(field_quiet, field_every);
+
+  const testing::ToolRun bad = run_tool("probe " + q(dir_) + " --contact 3 --method cd --running-every -1 --out " +
+                                        q(root_ / "bad"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--running-every"), std::string::npos) << bad.output;
+}
+
 TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
   // A campaign of 6 probes made in three runs (stopped after 2, 2, then finished): each save
   // of the checkpoint records the runs so far ("runs"), --partial and the summary report them

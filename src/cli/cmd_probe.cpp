@@ -49,6 +49,7 @@ struct ProbeOptions {
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
+  double running_every = CheckpointedCampaignOptions{}.running_every_s;  // --running-every (s)
   std::vector<double> fit_window;  // [r_lo, r_hi], empty: the default rule
   bool quiet = false;
   std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
@@ -191,6 +192,27 @@ std::string not_converged_message(const ProbeResult& r, const std::string& metho
          "): its F_crit and field are not a solution (" + hint + ")";
 }
 
+// The prefix of a rank's lines under mpirun; "" for one process.
+std::string rank_prefix(const WorkDistributor& dist) {
+  return dist.ranks() > 1 ? "rank " + std::to_string(dist.rank()) + ": " : "";
+}
+
+// A sign of life of probes that run for minutes to hours (cd at 2000 disks and more), every
+// --running-every seconds of a probe on stderr, with its work so far (cd: its polls are its
+// pieces, over all its paths; nlgs: 16 sweeps each); none with --quiet. `rank`: the line's
+// prefix under mpirun, "" otherwise.
+std::function<void(int, double, long long)> running_printer(const ProbeOptions& o, const std::string& rank) {
+  if (o.quiet) return {};
+  const std::string method = o.method;
+  return [rank, method](int contact, double seconds, long long polls) {
+    const std::string work = method == "cd"     ? " (" + std::to_string(polls) + " pieces so far)"
+                             : method == "nlgs" ? " (~" + std::to_string(16 * polls) + " sweeps so far)"
+                                                : "";
+    std::fprintf(stderr, "  %scontact %d: probing for %s%s\n", rank.c_str(), contact,
+                 format_duration(seconds).c_str(), work.c_str());
+  };
+}
+
 void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
   if (!o.export_problem.empty()) {
     write_siconos_problem(build_cd_step(p, o.contact, s.nlgs), o.export_problem);
@@ -200,7 +222,9 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   const auto t0 = std::chrono::steady_clock::now();
   const bool exact = s.method == ProbeMethod::kLemke || s.method == ProbeMethod::kCd;
   CdPathStats stats;
-  const ProbeResult r = exact ? probe_exact_with_forces(p, s, o.contact, out, stats) : probe_contact(p, s, o.contact);
+  const auto running = running_printer(o, "");
+  const CampaignSettings st = running && s.method != ProbeMethod::kLp ? with_running(s, o.contact, running, o.running_every) : s;
+  const ProbeResult r = exact ? probe_exact_with_forces(p, st, o.contact, out, stats) : probe_contact(p, st, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
@@ -239,28 +263,13 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, const RunTime& time, const fs::path& file);
 
-// A sign of life of probes that run for minutes to hours (cd at 2000 disks and more), every
-// CampaignHooks::running_every_s of a probe on stderr, with its work so far (cd: its polls
-// are its pieces, over all its paths; nlgs: 16 sweeps each); none with --quiet.
-std::function<void(int, double, long long)> running_printer(const ProbeOptions& o, const WorkDistributor& dist) {
-  if (o.quiet) return {};
-  const std::string rank = dist.ranks() > 1 ? "rank " + std::to_string(dist.rank()) + ": " : "";
-  const std::string method = o.method;
-  return [rank, method](int contact, double seconds, long long polls) {
-    const std::string work = method == "cd"     ? " (" + std::to_string(polls) + " pieces so far)"
-                             : method == "nlgs" ? " (~" + std::to_string(16 * polls) + " sweeps so far)"
-                                                : "";
-    std::fprintf(stderr, "  %scontact %d: probing for %s%s\n", rank.c_str(), contact,
-                 format_duration(seconds).c_str(), work.c_str());
-  };
-}
-
 // An MPI rank other than 0: probes what rank 0 hands out, writes nothing.
 void run_worker(const Packing& p, const CampaignSettings& s, WorkDistributor& dist,
-                const std::function<void(int, double, long long)>& running) {
+                const std::function<void(int, double, long long)>& running, double running_every_s) {
   CampaignState unused = empty_campaign_state(p);
   CampaignHooks hooks;
   hooks.running = running;
+  hooks.running_every_s = running_every_s;
   hooks.should_stop = InterruptGuard::requested;
   hooks.cancel = InterruptGuard::requested;  // this rank's own signal (mpirun forwards SIGTERM to every rank)
   const InterruptGuard interrupts;
@@ -334,13 +343,14 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     return write_partial(o, p, run.checkpoint, run.settings, static_cast<int>(planned), out);
   }
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
-  if (!dist->gathers()) return run_worker(p, s, *dist, running_printer(o, *dist));
+  if (!dist->gathers()) return run_worker(p, s, *dist, running_printer(o, rank_prefix(*dist)), o.running_every);
   const auto lock = lock_output(out, shard, shards);
   run.checkpoint_s = o.checkpoint_s;
   run.stop_after = o.stop_after;
   run.interrupted = InterruptGuard::requested;
   run.progress = progress_printer(o);
-  run.running = running_printer(o, *dist);
+  run.running = running_printer(o, rank_prefix(*dist));
+  run.running_every_s = o.running_every;
   CampaignState state = start_state(run.checkpoint, p, run.settings, run.earlier);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
@@ -569,6 +579,9 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--fit-window", o->fit_window,
                   "r_lo r_hi of the power-law fit of d(r) (R_max; default [<2R>, min(10 <2R>, L/2)])")
       ->expected(2);
+  cmd->add_option("--running-every", o->running_every,
+                  "seconds of a probe between its 'probing for' lines (cd, nlgs, lemke; 0: at every poll)")
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
   cmd->add_option("--shard", o->shard,
                   "i/K: probe only the contacts k with k mod K = i (one job of a job array; "

@@ -104,25 +104,6 @@ ProbeResult decode(const std::string& bytes) {
   return r;
 }
 
-// s with its probes' cancel also calling `running` (CampaignHooks::running) every `every`
-// seconds of the probe of contact k.
-CampaignSettings with_running(const CampaignSettings& s, int k,
-                              const std::function<void(int, double, long long)>& running, double every) {
-  CampaignSettings st = s;
-  using clock = std::chrono::steady_clock;
-  st.nlgs.cancel = [cancel = s.nlgs.cancel, &running, k, every, t0 = clock::now(), next = every,
-                    polls = 0LL]() mutable {
-    ++polls;
-    const double seconds = std::chrono::duration<double>(clock::now() - t0).count();
-    if (seconds >= next) {
-      running(k, seconds, polls);
-      next = every > 0.0 ? every * (std::floor(seconds / every) + 1.0) : seconds;
-    }
-    return cancel && cancel();
-  };
-  return st;
-}
-
 // The work of a loop of probes on this process: task t probes contacts[t] (contact t if
 // `contacts` is null), one probe per thread at a time on omp_get_max_threads() threads, each
 // thread with its own worker (the LP probe keeps its model); each result as bytes. A probe
@@ -154,6 +135,23 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
 }
 
 }  // namespace
+
+CampaignSettings with_running(const CampaignSettings& s, int k,
+                              const std::function<void(int, double, long long)>& running, double every) {
+  CampaignSettings st = s;
+  using clock = std::chrono::steady_clock;
+  st.nlgs.cancel = [cancel = s.nlgs.cancel, running, k, every, t0 = clock::now(), next = every,
+                    polls = 0LL]() mutable {
+    ++polls;
+    const double seconds = std::chrono::duration<double>(clock::now() - t0).count();
+    if (seconds >= next) {
+      running(k, seconds, polls);
+      next = every > 0.0 ? every * (std::floor(seconds / every) + 1.0) : seconds;
+    }
+    return cancel && cancel();
+  };
+  return st;
+}
 
 const char* method_name(ProbeMethod method) {
   switch (method) {

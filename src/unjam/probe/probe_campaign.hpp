@@ -103,6 +103,14 @@ struct CampaignHooks {
   double running_every_s = 300.0;
 };
 
+// s with its probes' interrupt poll (s.nlgs.cancel, which it keeps calling) also calling
+// `running(k, seconds, polls)` (CampaignHooks::running) each time another `every` seconds of
+// the probe of contact k have passed; every = 0 calls it at every poll. For one probe run
+// outside a campaign (`unjam probe --contact K`); the campaigns wrap their probes so.
+CampaignSettings with_running(const CampaignSettings& s, int k,
+                              const std::function<void(int contact, double seconds, long long polls)>& running,
+                              double every);
+
 struct CampaignSummary {
   int probes = 0;
   int not_converged = 0;             // with the probes that found no solution (not in the means)
