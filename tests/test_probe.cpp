@@ -373,6 +373,8 @@ TEST(ProbeCampaign, RunningProbesReportThemselvesAndTheirResultsStayTheSame) {
   bad.running_every_s = -1.0;
   CampaignState unused(grid);
   EXPECT_THROW(run_campaign(p, s, unused, bad), Error);
+  EXPECT_THROW(with_running(s, 0, bad.running, -1.0), Error);
+  EXPECT_THROW(with_running(s, 0, bad.running, std::nan("")), Error);
 }
 
 TEST(ProbeCampaign, RecordedIntegerSettingsThatAreHugeFloatsAreRefused) {

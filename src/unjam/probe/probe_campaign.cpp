@@ -138,6 +138,7 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
 
 CampaignSettings with_running(const CampaignSettings& s, int k,
                               const std::function<void(int, double, long long)>& running, double every) {
+  if (!(every >= 0.0)) throw Error("with_running: the interval must be >= 0 s (got " + std::to_string(every) + ")");
   CampaignSettings st = s;
   using clock = std::chrono::steady_clock;
   st.nlgs.cancel = [cancel = s.nlgs.cancel, running, k, every, t0 = clock::now(), next = every,

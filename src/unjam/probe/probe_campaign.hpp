@@ -106,7 +106,8 @@ struct CampaignHooks {
 // s with its probes' interrupt poll (s.nlgs.cancel, which it keeps calling) also calling
 // `running(k, seconds, polls)` (CampaignHooks::running) each time another `every` seconds of
 // the probe of contact k have passed; every = 0 calls it at every poll. For one probe run
-// outside a campaign (`unjam probe --contact K`); the campaigns wrap their probes so.
+// outside a campaign (`unjam probe --contact K`); the campaigns wrap their probes so. Throws
+// unjam::Error for every < 0 or NaN.
 CampaignSettings with_running(const CampaignSettings& s, int k,
                               const std::function<void(int contact, double seconds, long long polls)>& running,
                               double every);
