@@ -49,7 +49,7 @@ struct ProbeOptions {
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
-  double running_every = CheckpointedCampaignOptions{}.running_every_s;  // --running-every (s)
+  double running_every = kRunningEverySeconds;  // --running-every (s)
   std::vector<double> fit_window;  // [r_lo, r_hi], empty: the default rule
   bool quiet = false;
   std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
@@ -222,8 +222,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   const auto t0 = std::chrono::steady_clock::now();
   const bool exact = s.method == ProbeMethod::kLemke || s.method == ProbeMethod::kCd;
   CdPathStats stats;
-  const auto running = running_printer(o, "");
-  const CampaignSettings st = running && s.method != ProbeMethod::kLp ? with_running(s, o.contact, running, o.running_every) : s;
+  const CampaignSettings st = with_running(s, o.contact, running_printer(o, ""), o.running_every);
   const ProbeResult r = exact ? probe_exact_with_forces(p, st, o.contact, out, stats) : probe_contact(p, st, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);

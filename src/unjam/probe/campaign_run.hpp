@@ -48,7 +48,7 @@ struct CheckpointedCampaignOptions {
   std::function<void(int, int, double, double)> progress;
   // CampaignHooks::running and its interval: a sign of life of long probes. May be empty.
   std::function<void(int contact, double seconds, long long polls)> running;
-  double running_every_s = 300.0;
+  double running_every_s = kRunningEverySeconds;
   CampaignTime earlier;  // of the runs before this one (SavedCampaign::time)
 };
 

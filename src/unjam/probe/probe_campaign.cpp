@@ -115,9 +115,8 @@ void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;
     try {
-      // (the lp probe does not poll: nothing to report, nor a copy of the settings to make)
-      if (running && s.method != ProbeMethod::kLp)
-        return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
+      // (a probe that does not poll has nothing to report, nor a copy of the settings to make)
+      if (running && probe_polls(s.method)) return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
       return encode(w.probe(p, s, k));
     } catch (const Cancelled&) {
       throw;
@@ -139,6 +138,7 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
 CampaignSettings with_running(const CampaignSettings& s, int k,
                               const std::function<void(int, double, long long)>& running, double every) {
   if (!(every >= 0.0)) throw Error("with_running: the interval must be >= 0 s (got " + std::to_string(every) + ")");
+  if (!running || !probe_polls(s.method)) return s;
   CampaignSettings st = s;
   using clock = std::chrono::steady_clock;
   st.nlgs.cancel = [cancel = s.nlgs.cancel, running, k, every, t0 = clock::now(), next = every,

@@ -87,6 +87,15 @@ struct CampaignState {
   explicit CampaignState(const ResponseGrid& grid) : average(grid) {}
 };
 
+// The default interval of the running probes' line (CampaignHooks::running, probe
+// --running-every), in seconds.
+inline constexpr double kRunningEverySeconds = 300.0;
+
+// Whether a probe of this method polls its interrupt (ProbeSettings::cancel) while it runs:
+// nlgs, lemke and cd do; an lp probe does not, so it can neither be abandoned nor report that
+// it is running.
+inline bool probe_polls(ProbeMethod method) { return method != ProbeMethod::kLp; }
+
 struct CampaignHooks {
   std::function<void(int done, int total)> progress;  // after every gathered probe
   std::function<void(const CampaignState&)> checkpoint;  // after every gathered probe
@@ -100,13 +109,14 @@ struct CampaignHooks {
   // with its contact, its seconds so far (wall time) and its polls so far (cd: one before
   // every piece of every path; nlgs: one per 16 sweeps). Thread safe; may be empty.
   std::function<void(int contact, double seconds, long long polls)> running;
-  double running_every_s = 300.0;
+  double running_every_s = kRunningEverySeconds;
 };
 
 // s with its probes' interrupt poll (s.nlgs.cancel, which it keeps calling) also calling
 // `running(k, seconds, polls)` (CampaignHooks::running) each time another `every` seconds of
-// the probe of contact k have passed; every = 0 calls it at every poll. For one probe run
-// outside a campaign (`unjam probe --contact K`); the campaigns wrap their probes so. Throws
+// the probe of contact k have passed; every = 0 calls it at every poll. s as it is where
+// `running` is empty or the method does not poll (probe_polls). For one probe run outside a
+// campaign (`unjam probe --contact K`); the campaigns wrap their probes so. Throws
 // unjam::Error for every < 0 or NaN.
 CampaignSettings with_running(const CampaignSettings& s, int k,
                               const std::function<void(int contact, double seconds, long long polls)>& running,
