@@ -6,12 +6,14 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string>
 
 #include <Eigen/Eigenvalues>
 
+#include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/lemke.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -509,6 +511,132 @@ TEST(CdStep, ExportsTheStepInSiconosFormat) {
   double w00 = 0.0;
   in >> w00;
   EXPECT_EQ(w00, W(0, 0));  // %.17g round-trips exactly
+}
+
+// A window around the probed pair (probe/cd_step.hpp, window_step; docs/probe.md, "A window
+// around the probed pair").
+TEST(CdWindow, AWindowThatCoversTheCellIsTheWholeStep) {
+  const Packing& p = fixture("p50-mu1");
+  ProbeSettings s;
+  const CdStepProblem whole = build_cd_step(p, 1, s);
+  s.window = 1e3;  // mean diameters: every grain
+  const CdStepProblem w = build_cd_step(p, 1, s);
+  ASSERT_EQ(w.num_contacts(), whole.num_contacts());
+  EXPECT_EQ(w.probed, whole.probed);
+  EXPECT_EQ(w.system.contacts, whole.system.contacts);
+  EXPECT_EQ(w.system.grains, whole.system.grains);
+  EXPECT_EQ(Eigen::MatrixXd(w.system.A), Eigen::MatrixXd(whole.system.A));
+  EXPECT_EQ(w.system.rhs, whole.system.rhs);
+  EXPECT_EQ(w.inverse_mass, whole.inverse_mass);
+  EXPECT_EQ(w.g_eff, whole.g_eff);
+  const CdStepSolution a = probe_cd_path(p, 1, ProbeSettings{}), b = probe_cd_path(p, 1, s);
+  ASSERT_TRUE(a.result.converged);
+  EXPECT_EQ(a.result.f_crit, b.result.f_crit);
+  EXPECT_EQ(a.f, b.f);
+}
+
+TEST(CdWindow, ClampsTheGrainsOutsideAndKeepsTheStaticNetworkASolution) {
+  // p500-mu0.1, contact 207, a window of 4 mean diameters: its grains are those within reach
+  // of the pair's midpoint, its contacts every one with a grain inside, the static network
+  // balances every grain of the window and the window's share of the bath, and the path
+  // solves the window exactly with every grain outside at rest relative to the cell.
+  const Packing& p = fixture("p500-mu0.1");
+  const int probed = 207;
+  ProbeSettings s;
+  s.window = 4.0;
+  const CdStepProblem w = build_cd_step(p, probed, s);
+  const double reach = 4.0 * 2.0 * p.mean_radius();
+  const Contact& pc = p.contacts[probed];
+  const Vec2 centre = p.particles.position(pc.a) + 0.5 * pc.l;
+  std::vector<char> inside(p.size(), 0);
+  for (const int g : w.system.grains) {
+    EXPECT_LE(p.cell.min_image(p.particles.position(g) - centre).norm(), reach) << "grain " << g;
+    inside[g] = 1;
+  }
+  EXPECT_EQ(w.system.contacts[w.probed], probed);
+  std::size_t with_grain_inside = 0;
+  for (std::size_t k = 0; k < p.contacts.size(); ++k)
+    with_grain_inside += inside[p.contacts[k].a] || inside[p.contacts[k].b];
+  EXPECT_EQ(static_cast<std::size_t>(w.num_contacts()), with_grain_inside);
+  EXPECT_LT(4 * w.num_contacts(), static_cast<int>(p.contacts.size()));  // far smaller than the packing
+  for (const int k : w.system.contacts)
+    EXPECT_TRUE(inside[p.contacts[k].a] || inside[p.contacts[k].b]) << "contact " << k;
+
+  const Eigen::VectorXd f0 = packing_forces(p, w.system);
+  const Eigen::VectorXd load = w.system.A * f0 - w.system.rhs;
+  const double F0 = w.system.F0;
+  EXPECT_LT(load.head(load.size() - 1).cwiseAbs().maxCoeff(), 1e-9 * F0);           // grains balanced
+  EXPECT_LT(std::abs(load[load.size() - 1]), 1e-12 * std::abs(w.system.rhs.tail(1)[0]));  // the bath's share
+  EXPECT_GT(w.system.rhs.tail(1)[0], 0.0);
+  // The unshifted window: the static network leaves only the probed pair unopened (1 g).
+  EXPECT_NEAR(cd_step_residual(w, f0).penetration, 1.0, 1e-6);
+
+  const CdStepSolution sol = probe_cd_path(p, probed, s);
+  ASSERT_TRUE(sol.result.converged);
+  EXPECT_LE(cd_step_residual(w, sol.f).max(), kExactStepTolerance);
+  EXPECT_GT(sol.result.f_crit, 0.0);
+  int moved = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!inside[i]) {
+      EXPECT_EQ(sol.result.u[i].norm(), 0.0) << "grain " << i;
+      EXPECT_EQ(sol.result.u_rot[i], 0.0) << "grain " << i;
+    } else {
+      moved += sol.result.u[i].norm() > 1e-6 * s.g;
+    }
+  }
+  EXPECT_GT(moved, 2);
+  // Not the whole packing's step: the clamp changes F_crit (docs/probe.md).
+  const CdStepSolution whole = probe_cd_path(p, probed, ProbeSettings{});
+  ASSERT_TRUE(whole.result.converged);
+  EXPECT_GT(std::abs(sol.result.f_crit / whole.result.f_crit - 1.0), 0.01);
+}
+
+TEST(CdWindow, LemkeAndThePathAgreeOnAWindow) {
+  // Two independent exact solvers on the same window of p50-mu0.1 (2.5 mean diameters),
+  // at the quasi-static time step of the exact methods (the CLI's default; at dt = 1e-3 the
+  // window's dense Lemke does not solve contact 0 exactly).
+  const Packing& p = fixture("p50-mu0.1");
+  ProbeSettings s;
+  s.window = 2.5;
+  s.dt = default_probe_dt(ProbeMethod::kCd, s.g);
+  for (int k = 0; k < 6; ++k) {
+    const CdStepSolution path = probe_cd_path(p, k, s);
+    const CdStepSolution lemke = probe_cd_lemke(p, k, s);
+    ASSERT_TRUE(path.result.converged) << "contact " << k;
+    ASSERT_TRUE(lemke.result.converged) << "contact " << k;
+    EXPECT_NEAR(path.result.f_crit / lemke.result.f_crit, 1.0, 1e-6) << "contact " << k;
+    EXPECT_LT(build_cd_step(p, k, s).num_contacts(), p.contacts.size());
+  }
+}
+
+TEST(CdWindow, RefusesABadRadiusAndTheLpStart) {
+  const Packing& p = fixture("p50-mu1");
+  for (const double r : {-1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    ProbeSettings s;
+    s.window = r;
+    EXPECT_THROW(build_cd_step(p, 1, s), Error) << r;
+  }
+  EXPECT_THROW(window_step(build_cd_step(p, 1, ProbeSettings{}), p, 0.0), Error);
+  ProbeSettings s;
+  s.window = 3.0;
+  CdPathSettings lp;
+  lp.start = CdPathStart::lp_optimum;
+  EXPECT_THROW(probe_cd_path(p, 1, s, lp), Error);
+  CampaignSettings c = campaign_settings_for(p);
+  c.nlgs.window = 3.0;
+  c.method = ProbeMethod::kLp;
+  EXPECT_THROW(validate(c), Error);
+  c.method = ProbeMethod::kNlgs;
+  EXPECT_THROW(validate(c), Error);
+  c.method = ProbeMethod::kCd;
+  EXPECT_NO_THROW(validate(c));
+  c.cd.start = CdPathStart::lp_optimum;
+  EXPECT_THROW(validate(c), Error);
+  c.method = ProbeMethod::kLemke;
+  c.cd.start = CdPathStart::static_network;
+  EXPECT_NO_THROW(validate(c));
+  c.nlgs.window = -2.0;
+  EXPECT_THROW(validate(c), Error);
 }
 
 }  // namespace

@@ -388,6 +388,40 @@ TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
 }
 
+TEST_F(CliProbe, AWindowIsRecordedAndRefusedWhereItDoesNotApply) {
+  // --window 2.5 (docs/probe.md, "A window around the probed pair"): a cd campaign records it
+  // in its settings, so a checkpoint made with it is not resumed without it; a single probe
+  // writes the forces of the window's contacts only; lp and nlgs, and a radius <= 0, are
+  // refused with exit 1.
+  const fs::path out = root_ / "window", single = root_ / "window-single";
+  for (const fs::path& d : {out, single}) fs::create_directories(d);
+  const std::string args = " --sample 4 --method cd --quiet --threads 1 --out " + q(out);
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + " --window 2.5 --stop-after 2");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  r = run_tool("probe " + q(dir_) + args);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("window_d"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + args + " --window 2.5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json_file(out / "probe_summary.json")["settings"]["window_d"].get<double>(), 2.5);
+  const CsvTable rows = CsvTable::read(out / "probes.csv");
+  ASSERT_EQ(rows.rows(), 4u);
+  for (std::size_t i = 0; i < rows.rows(); ++i) EXPECT_EQ(rows.integer(i, rows.column("converged")), 1) << i;
+
+  r = run_tool("probe " + q(dir_) + " --contact 1 --method cd --window 2.5 --quiet --out " + q(single));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable forces = CsvTable::read(single / "probe-1-forces.csv");
+  EXPECT_GT(forces.rows(), 0u);
+  EXPECT_LT(forces.rows(), CsvTable::read(dir_ / "contacts.csv").rows());
+  for (const std::string method : {"lp", "nlgs"}) {
+    r = run_tool("probe " + q(dir_) + " --contact 1 --window 2.5 --method " + method + " --out " + q(single));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("--window applies to the exact methods"), std::string::npos) << r.output;
+  }
+  r = run_tool("probe " + q(dir_) + " --contact 1 --method cd --window 0 --out " + q(single));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+}
+
 TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutionsHere) {
   // --method cd --cd-start compliant on a seeded sample of p50-mu0.1: every probe exact, and
   // on this packing the same F_crit as the path from the static network within 1e-3

@@ -205,6 +205,25 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")
 
 
+def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):
+    # window as `unjam probe --window`: the same field and F_crit, bit for bit; zero outside
+    # the window; another F_crit than the whole packing's (docs/probe.md, "A window around
+    # the probed pair"); refused for lp and for a radius <= 0.
+    tool("probe", FIXTURE, "--contact", 1, "--method", "cd", "--window", 2.5, "--out", tmp_path)
+    rows = read_csv(tmp_path / "probe-1.csv")
+    w = unjam.probe(p50, contact=1, method="cd", window=2.5)
+    assert w.converged
+    assert [[float(x["ux"]), float(x["uy"])] for x in rows] == w.u.tolist()
+    forces = {int(x["contact"]): float(x["fn"]) for x in read_csv(tmp_path / "probe-1-forces.csv")}
+    assert forces[1] == w.f_crit and len(forces) < 82
+    assert np.count_nonzero(np.hypot(w.u[:, 0], w.u[:, 1])) < len(p50.radii)
+    assert abs(w.f_crit / unjam.probe(p50, contact=1, method="cd").f_crit - 1) > 1e-3
+    with pytest.raises(unjam.Error, match="--window applies to the exact methods"):
+        unjam.probe(p50, contact=1, method="lp", window=2.5)
+    with pytest.raises(unjam.Error, match="window must be > 0"):
+        unjam.probe(p50, contact=1, method="cd", window=0.0)
+
+
 def test_bad_arguments_raise(p50, tmp_path):
     with pytest.raises(unjam.Error, match="does not exist"):
         unjam.read_packing(tmp_path / "missing")

@@ -46,6 +46,7 @@ struct ProbeOptions {
   double g = 1e-9, velocity_tol = 1e-6;
   double dt = 0.0;                 // 0: default_probe_dt(method, g)
   double max_inertia = 0.0;        // > 0: CampaignSettings::max_inertia (F0)
+  double window = 0.0;             // > 0: ProbeSettings::window (mean diameters)
   long long max_sweeps = 10'000'000;
   int threads = 0;
   double checkpoint_s = 30.0;
@@ -74,6 +75,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
   s.max_inertia = o.max_inertia;
+  s.nlgs.window = o.window;
   validate(s);
   return s;
 }
@@ -221,6 +223,14 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   }
   const auto t0 = std::chrono::steady_clock::now();
   const bool exact = s.method == ProbeMethod::kLemke || s.method == ProbeMethod::kCd;
+  if (s.nlgs.window > 0.0) {  // said before the probe runs, which may take long
+    const CdStepProblem w = build_cd_step(p, o.contact, s.nlgs);
+    std::printf("contact %d: a window of %g mean diameters, %zu grains and %d contacts of %zu and %zu; every "
+                "other grain clamped to the cell (not the whole packing's step; docs/probe.md, \"A window around "
+                "the probed pair\")\n",
+                o.contact, s.nlgs.window, w.system.grains.size(), w.num_contacts(), p.size(), p.contacts.size());
+    std::fflush(stdout);
+  }
   CdPathStats stats;
   const CampaignSettings st = with_running(s, o.contact, running_printer(o, ""), o.running_every);
   const ProbeResult r = exact ? probe_exact_with_forces(p, st, o.contact, out, stats) : probe_contact(p, st, o.contact);
@@ -353,8 +363,11 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   CampaignState state = start_state(run.checkpoint, p, run.settings, run.earlier);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), omp_get_max_threads(), spread.c_str());
+  char window[96] = "";
+  if (s.nlgs.window > 0.0)
+    std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, omp_get_max_threads(), spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
@@ -553,6 +566,12 @@ void add_probe_command(CLI::App& app) {
       "starts\")")
       ->capture_default_str()
       ->check(non_negative_number());
+  cmd->add_option("--window", o->window,
+                  "lemke, cd: solve the step on the grains within this many mean diameters of the probed pair only, "
+                  "every other grain clamped to the cell. Not the paper's probe: F_crit of the clamped window, "
+                  "which approaches the whole packing's with the radius (docs/probe.md, \"A window around the probed "
+                  "pair\"; default: the whole packing)")
+      ->check(positive_number());
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");

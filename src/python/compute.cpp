@@ -126,7 +126,7 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
 
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
                                 std::optional<double> dt, double velocity_tol, long long max_sweeps,
-                                const std::string& cd_start, int cd_softer_starts) {
+                                const std::string& cd_start, int cd_softer_starts, std::optional<double> window) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.cd.start = cd_start_from_name(cd_start);
@@ -135,6 +135,10 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
   s.nlgs.max_sweeps = max_sweeps;
+  if (window) {
+    if (!(*window > 0.0)) throw Error("window must be > 0 (mean diameters; None: the whole packing)");
+    s.nlgs.window = *window;
+  }
   validate(s);
   return s;
 }
@@ -144,10 +148,11 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 // in the order of contacts=[...].
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, std::optional<double> dt, double velocity_tol,
-                 long long max_sweeps, const std::string& cd_start, int cd_softer_starts, int threads) {
+                 long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
+                 std::optional<double> window, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd_softer_starts);
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd_softer_starts, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   s.nlgs.cancel = [&poll] { return poll(); };
@@ -301,13 +306,16 @@ void bind_compute(py::module_& m) {
         py::arg("contacts") = py::none(), py::arg("method") = method_name(cd.method),
         py::arg("g") = cd.nlgs.g, py::arg("dt") = py::none(), py::arg("velocity_tol") = cd.nlgs.velocity_tol,
         py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("cd_start") = cd_start_name(cd.cd.start),
-        py::arg("cd_softer_starts") = cd.cd.softer_starts, py::arg("threads") = 0,
+        py::arg("cd_softer_starts") = cd.cd.softer_starts, py::arg("window") = py::none(), py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
         "cd_start: where the cd method's path starts, 'static', 'compliant' or 'lp' "
         "(`unjam probe --cd-start`; docs/probe.md, \"Where the path starts\"); cd_softer_starts: "
-        "the compliant start's softer starts (`unjam probe --cd-softer-starts`)");
+        "the compliant start's softer starts (`unjam probe --cd-softer-starts`); window: lemke, cd: "
+        "the step on the grains within this many mean diameters of the probed pair, the others clamped "
+        "to the cell, not the paper's probe (`unjam probe --window`; docs/probe.md, \"A window around "
+        "the probed pair\"); None: the whole packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -840,6 +840,8 @@ constexpr double kScaledRestartTolerance = 0.01;
 
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
+  if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
+    throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
   CdStepGuess lp_guess;
   const CdStepGuess* guess = nullptr;

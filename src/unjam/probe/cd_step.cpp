@@ -20,13 +20,89 @@ CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSett
   if (contact < 0 || contact >= nc)
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(nc) + ")");
+  if (!(settings.window >= 0.0 && std::isfinite(settings.window)))
+    throw Error("the probe's window must be >= 0 and finite (mean diameters; got " +
+                std::to_string(settings.window) + ")");
   CdStepProblem pb;
   static_cast<ContactProblem&>(pb) =
       build_contact_problem(packing, contact_model_of(packing, settings.model), settings.dt);
   pb.probed = contact;
   pb.g = settings.g;
   pb.g_eff[contact] = -settings.g;
-  return pb;
+  return settings.window > 0.0 ? window_step(pb, packing, settings.window) : pb;
+}
+
+CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, double radius) {
+  if (!(radius > 0.0 && std::isfinite(radius)))
+    throw Error("a window's radius must be positive and finite (mean diameters; got " + std::to_string(radius) + ")");
+  const EquilibriumSystem& sys = step.system;
+  const Contact& probed = packing.contacts[sys.contacts[step.probed]];
+  // The probed pair's midpoint: grain a's centre plus half the branch vector l (a to b).
+  const Vec2 centre = packing.particles.position(probed.a) + 0.5 * probed.l;
+  const double reach = radius * 2.0 * packing.mean_radius();
+  std::vector<char> inside(packing.size(), 0);
+  for (std::size_t i = 0; i < packing.size(); ++i)
+    inside[i] = step.cell.min_image(packing.particles.position(i) - centre).norm() <= reach;
+  inside[probed.a] = inside[probed.b] = 1;  // the probed pair itself, whatever the radius
+
+  // Rows: the window's grains keep their three rows, in the order of sys.grains; the
+  // pressure row stays last, over the kept contacts.
+  const int rows_full = static_cast<int>(sys.A.rows()), p_full = rows_full - 1;
+  std::vector<int> row_of(rows_full, -1);
+  CdStepProblem w;
+  for (std::size_t g = 0; g < sys.grains.size(); ++g)
+    if (inside[sys.grains[g]]) {
+      const int r = 3 * static_cast<int>(w.system.grains.size());
+      for (int c = 0; c < 3; ++c) row_of[3 * g + c] = r + c;
+      w.system.grains.push_back(sys.grains[g]);
+    }
+  const int rows = 3 * static_cast<int>(w.system.grains.size()) + 1;
+  row_of[p_full] = rows - 1;
+  std::vector<int> kept;  // positions in sys.contacts
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    const Contact& c = packing.contacts[sys.contacts[k]];
+    if (inside[c.a] || inside[c.b]) kept.push_back(k);
+  }
+  std::vector<Eigen::Triplet<double>> t;
+  for (std::size_t j = 0; j < kept.size(); ++j)
+    for (int c = 0; c < 2; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(sys.A, 2 * kept[j] + c); it; ++it)
+        if (const int r = row_of[it.row()]; r >= 0) t.emplace_back(r, static_cast<int>(2 * j + c), it.value());
+  w.system.A.resize(rows, static_cast<Eigen::Index>(2 * kept.size()));
+  w.system.A.setFromTriplets(t.begin(), t.end());
+  w.system.mu = sys.mu;
+  w.system.F0 = sys.F0;
+  // The bath on the window: the pressure row's load is the window's share of 2 V P_ext (the
+  // static network's virial over the kept contacts, a_p f0, times 2 V P_ext / the virial over
+  // all contacts). So the static network still solves the unshifted window, and a window that
+  // covers the cell is the whole step. Without the row, the static network's prestress would be
+  // a self-stress of the clamped window (A_w (c f0) = 0 on its grains' rows for every c), and the
+  // rigid step would leave its level open.
+  const Eigen::VectorXd f0 = packing_forces(packing, sys);
+  double virial_all = 0.0, virial_kept = 0.0;
+  for (int k = 0; k < sys.num_contacts(); ++k) virial_all += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
+  for (const int k : kept) virial_kept += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
+  w.system.rhs = Eigen::VectorXd::Zero(rows);
+  w.system.rhs[rows - 1] = kept.size() == static_cast<std::size_t>(sys.num_contacts())
+                               ? sys.rhs[p_full]
+                               : sys.rhs[p_full] * (virial_kept / virial_all);
+
+  w.cell = step.cell;
+  w.model = step.model;
+  w.dt = step.dt;
+  w.g = step.g;
+  w.inverse_mass.resize(rows);
+  for (int r = 0; r < rows_full; ++r)
+    if (row_of[r] >= 0) w.inverse_mass[row_of[r]] = step.inverse_mass[r];
+  w.g_eff.resize(static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t j = 0; j < kept.size(); ++j) {
+    const int k = kept[j];
+    w.system.contacts.push_back(sys.contacts[k]);
+    w.g_eff[static_cast<Eigen::Index>(j)] = step.g_eff[k];
+    w.state.push_back(step.state[k]);
+    if (k == step.probed) w.probed = static_cast<int>(j);
+  }
+  return w;
 }
 
 void write_siconos_problem(const CdStepProblem& pb, const std::filesystem::path& file) {
@@ -102,7 +178,7 @@ CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSe
   const int nc = pb.num_contacts();
   if (nc > kMaxLemkeContacts)
     throw Error("the dense Lemke probe handles at most " + std::to_string(kMaxLemkeContacts) +
-                " contacts (this packing has " + std::to_string(nc) + "); use --method lp or nlgs");
+                " contacts (this step has " + std::to_string(nc) + "); use --method cd, lp or nlgs, or a smaller --window");
   Eigen::MatrixXd M;
   Eigen::VectorXd q;
   stewart_trinkle(pb, M, q);

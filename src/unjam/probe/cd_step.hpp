@@ -23,8 +23,24 @@ struct CdStepProblem : ContactProblem {
 
 // The step of probing packing.contacts[contact]: build_contact_problem under
 // contact_model_of(packing, settings.model), time step settings.dt, and g_eff = -settings.g on
-// the probed contact. Throws unjam::Error for a contact that does not exist.
+// the probed contact; where settings.window > 0, restricted to that window (window_step).
+// Throws unjam::Error for a contact that does not exist or a window that is negative or not
+// finite.
 CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSettings& settings);
+
+// The step restricted to a window around the probed pair (docs/probe.md, "A window around the
+// probed pair"). The window's grains are those whose centre lies within radius * 2 R_avg of
+// the probed pair's midpoint (minimum image), and the probed pair's own. They keep their rows;
+// every other grain is clamped to the cell (its rows are dropped: it moves only with the
+// cell's affine strain). The contacts kept are those with at least one grain in the window,
+// in the order of `step.system.contacts`; a contact with a clamped grain acts on the window's
+// grain alone. The pressure row is kept over the kept contacts with the window's share of the
+// bath's load, 2 V P_ext times the static network's virial over the kept contacts against its
+// virial over all: so the static network f0 still solves the unshifted window, the prestress
+// keeps its level (without the row, c f0 would balance the window's grains for every c), and
+// a window that covers the cell is the whole step. Every method of the whole step applies to
+// it; F_crit is that of the clamped window, not of the packing.
+CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, double radius);
 
 // How far forces f are from solving the step: step_residual with displacements in units of g.
 using CdStepResidual = StepResidual;

@@ -33,6 +33,12 @@ struct ProbeSettings {
   std::uint64_t seed = 0;
   // mu, P_ext, M_lambda, touch_gap of the step; empty: the packing's own (packing.meta.contact)
   std::optional<ContactModel> model;
+  // > 0 (lemke and cd only): the step restricted to a window, the grains within `window`
+  // mean diameters of the probed pair's midpoint, every other grain clamped to the cell
+  // (probe/cd_step.hpp, window_step; docs/probe.md, "A window around the probed pair"). It
+  // changes what is measured: F_crit of the clamped window, not of the packing. 0: the whole
+  // packing.
+  double window = 0.0;
   // Polled by the long probes at cheap points (nlgs: every 16 sweeps; cd: every piece of its
   // path); once it returns true the probe throws Cancelled (core/error.hpp). Called from the
   // probe's thread: thread safe where probes run in parallel. Empty: never. Not a setting of

@@ -208,6 +208,12 @@ void validate(const CampaignSettings& s) {
   if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
       !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
     throw Error("--cd-softer-starts applies to the cd method's compliant start only");
+  if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
+    throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
+  if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
+    throw Error(std::string("--window applies to the exact methods (cd, lemke), not to ") + method_name(s.method));
+  if (s.nlgs.window > 0.0 && s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::lp_optimum)
+    throw Error("--window does not go with --cd-start lp (the lp optimum is the whole packing's)");
   if (s.cd.start != CdPathStart::static_network && s.method != ProbeMethod::kCd)
     throw Error(std::string("the cd start '") + cd_start_name(s.cd.start) + "' applies to the cd method only (the method is " +
                 method_name(s.method) + ")");
@@ -381,6 +387,7 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
+    if (s.nlgs.window > 0.0) j["window_d"] = s.nlgs.window;            // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
       j["velocity_tol"] = s.nlgs.velocity_tol;
       j["max_sweeps"] = s.nlgs.max_sweeps;
