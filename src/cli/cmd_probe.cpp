@@ -568,9 +568,9 @@ void add_probe_command(CLI::App& app) {
       ->check(non_negative_number());
   cmd->add_option("--window", o->window,
                   "lemke, cd: solve the step on the grains within this many mean diameters of the probed pair only, "
-                  "every other grain clamped to the cell. Not the paper's probe: F_crit of the clamped window, "
-                  "which approaches the whole packing's with the radius (docs/probe.md, \"A window around the probed "
-                  "pair\"; default: the whole packing)")
+                  "every other grain clamped to the cell. Not the paper's probe: F_crit of the clamped window, the "
+                  "whole packing's only where the window covers the cell (at 500 disks and 10 diameters, 15-80 % above "
+                  "it; docs/probe.md, \"A window around the probed pair\"; default: the whole packing)")
       ->check(positive_number());
   cmd->add_option("--export-problem", o->export_problem,
                   "with --contact: write the probe step in Siconos' frictional contact problem format");

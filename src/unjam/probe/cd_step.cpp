@@ -82,6 +82,9 @@ CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, dou
   double virial_all = 0.0, virial_kept = 0.0;
   for (int k = 0; k < sys.num_contacts(); ++k) virial_all += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
   for (const int k : kept) virial_kept += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
+  if (!(virial_all > 0.0))
+    throw Error("a window needs a static network that carries the pressure (its virial is " +
+                std::to_string(virial_all) + ")");
   w.system.rhs = Eigen::VectorXd::Zero(rows);
   w.system.rhs[rows - 1] = kept.size() == static_cast<std::size_t>(sys.num_contacts())
                                ? sys.rhs[p_full]
