@@ -622,6 +622,7 @@ TEST(CdWindow, RefusesABadRadiusAndTheLpStart) {
   CdPathSettings lp;
   lp.start = CdPathStart::lp_optimum;
   EXPECT_THROW(probe_cd_path(p, 1, s, lp), Error);
+  EXPECT_THROW(probe_nlgs(p, 1, s), Error);  // the whole packing's step only
   CampaignSettings c = campaign_settings_for(p);
   c.nlgs.window = 3.0;
   c.method = ProbeMethod::kLp;

@@ -20,16 +20,13 @@ CdStepProblem build_cd_step(const Packing& packing, int contact, const ProbeSett
   if (contact < 0 || contact >= nc)
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(nc) + ")");
-  if (!(settings.window >= 0.0 && std::isfinite(settings.window)))
-    throw Error("the probe's window must be >= 0 and finite (mean diameters; got " +
-                std::to_string(settings.window) + ")");
   CdStepProblem pb;
   static_cast<ContactProblem&>(pb) =
       build_contact_problem(packing, contact_model_of(packing, settings.model), settings.dt);
   pb.probed = contact;
   pb.g = settings.g;
   pb.g_eff[contact] = -settings.g;
-  return settings.window > 0.0 ? window_step(pb, packing, settings.window) : pb;
+  return settings.window != 0.0 ? window_step(pb, packing, settings.window) : pb;  // window_step refuses < 0, NaN
 }
 
 CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, double radius) {
@@ -61,7 +58,10 @@ CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, dou
   std::vector<int> kept;  // positions in sys.contacts
   for (int k = 0; k < sys.num_contacts(); ++k) {
     const Contact& c = packing.contacts[sys.contacts[k]];
-    if (inside[c.a] || inside[c.b]) kept.push_back(k);
+    if (inside[c.a] || inside[c.b]) {
+      kept.push_back(k);
+      w.system.contacts.push_back(sys.contacts[k]);
+    }
   }
   std::vector<Eigen::Triplet<double>> t;
   for (std::size_t j = 0; j < kept.size(); ++j)
@@ -72,23 +72,20 @@ CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, dou
   w.system.A.setFromTriplets(t.begin(), t.end());
   w.system.mu = sys.mu;
   w.system.F0 = sys.F0;
-  // The bath on the window: the pressure row's load is the window's share of 2 V P_ext (the
-  // static network's virial over the kept contacts, a_p f0, times 2 V P_ext / the virial over
-  // all contacts). So the static network still solves the unshifted window, and a window that
-  // covers the cell is the whole step. Without the row, the static network's prestress would be
-  // a self-stress of the clamped window (A_w (c f0) = 0 on its grains' rows for every c), and the
-  // rigid step would leave its level open.
-  const Eigen::VectorXd f0 = packing_forces(packing, sys);
-  double virial_all = 0.0, virial_kept = 0.0;
-  for (int k = 0; k < sys.num_contacts(); ++k) virial_all += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
-  for (const int k : kept) virial_kept += sys.A.coeff(p_full, 2 * k) * f0[2 * k];
+  // The bath on the window: the pressure row's load is the window's share of 2 V P_ext, the
+  // static network's virial over the kept contacts (a_p f0, the pressure row of A_w f0) times
+  // 2 V P_ext / its virial over all. So the static network still solves the unshifted window,
+  // and a window that covers the cell is the whole step (the share is then x / x = 1 exactly).
+  // Without the row, the static network's prestress would be a self-stress of the clamped
+  // window (A_w (c f0) = 0 on its grains' rows for every c), and the rigid step would leave
+  // its level open.
+  const double virial_all = (sys.A * packing_forces(packing, sys))[p_full];
+  const double virial_kept = (w.system.A * packing_forces(packing, w.system))[rows - 1];
   if (!(virial_all > 0.0))
     throw Error("a window needs a static network that carries the pressure (its virial is " +
                 std::to_string(virial_all) + ")");
   w.system.rhs = Eigen::VectorXd::Zero(rows);
-  w.system.rhs[rows - 1] = kept.size() == static_cast<std::size_t>(sys.num_contacts())
-                               ? sys.rhs[p_full]
-                               : sys.rhs[p_full] * (virial_kept / virial_all);
+  w.system.rhs[rows - 1] = sys.rhs[p_full] * (virial_kept / virial_all);
 
   w.cell = step.cell;
   w.model = step.model;
@@ -100,7 +97,6 @@ CdStepProblem window_step(const CdStepProblem& step, const Packing& packing, dou
   w.g_eff.resize(static_cast<Eigen::Index>(kept.size()));
   for (std::size_t j = 0; j < kept.size(); ++j) {
     const int k = kept[j];
-    w.system.contacts.push_back(sys.contacts[k]);
     w.g_eff[static_cast<Eigen::Index>(j)] = step.g_eff[k];
     w.state.push_back(step.state[k]);
     if (k == step.probed) w.probed = static_cast<int>(j);

@@ -18,6 +18,8 @@ ProbeResult probe_nlgs(const Packing& packing, int contact, const ProbeSettings&
   if (contact < 0 || contact >= static_cast<int>(packing.contacts.size()))
     throw Error("contact " + std::to_string(contact) + " does not exist (the packing has " +
                 std::to_string(packing.contacts.size()) + ")");
+  if (set.window != 0.0)  // the setting of the exact steps (build_cd_step), not of this one
+    throw Error("the nlgs probe solves the whole packing's step; a window applies to the exact methods (cd, lemke)");
   Contacts contacts = packing.contacts;
   Particles particles = packing.particles;
 

@@ -37,7 +37,7 @@ struct ProbeSettings {
   // mean diameters of the probed pair's midpoint, every other grain clamped to the cell
   // (probe/cd_step.hpp, window_step; docs/probe.md, "A window around the probed pair"). It
   // changes what is measured: F_crit of the clamped window, not of the packing. 0: the whole
-  // packing.
+  // packing (the nlgs probe refuses any other value).
   double window = 0.0;
   // Polled by the long probes at cheap points (nlgs: every 16 sweeps; cd: every piece of its
   // path); once it returns true the probe throws Cancelled (core/error.hpp). Called from the
