@@ -32,7 +32,8 @@ compare-probes):
                     ratio_min, ratio_max, alpha_lp, alpha_lp_err, alpha_cd, alpha_cd_err (the
                     power-law fits of each probe_summary.json; empty where a fit failed),
                     pieces_median (median over the shared contacts of cd's `sweeps`, the
-                    pieces of its path), cpu_s_per_probe_cd (the cd campaign's busy
+                    pieces of all its paths; of the returned path only in campaigns run
+                    before 2026-11-27), cpu_s_per_probe_cd (the cd campaign's busy
                     seconds over all its runs / its timed probes, from all_runs; for a
                     summary without all_runs, its ranks' busy_seconds / its probes),
                     inertial (solved contacts

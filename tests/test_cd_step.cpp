@@ -450,6 +450,62 @@ TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {
   EXPECT_EQ(s.f.size(), 0);
 }
 
+TEST(CdPath, ABudgetOfPiecesStopsTheProbeAndOneItDoesNotReachChangesNothing) {
+  // CdPathSettings::max_probe_pieces (docs/probe.md, "A budget of pieces per probe") counts
+  // the pieces of every path of a probe together, as result.sweeps does.
+  const Packing& p = fixture("p50-mu0.1");
+  const ProbeSettings set;
+  CdPathStats all;
+  const CdStepSolution s = probe_cd_path(p, 69, set, CdPathSettings{}, &all);
+  ASSERT_TRUE(s.result.converged);
+  long long sum = 0;
+  for (const CdPathAttempt& a : all.paths) sum += a.pieces;
+  EXPECT_EQ(all.pieces_all, sum);
+  EXPECT_EQ(s.result.sweeps, all.pieces_all);
+  EXPECT_FALSE(all.budget_spent);
+  // A budget the probe does not exceed: the same probe, to the byte.
+  CdPathSettings enough;
+  enough.max_probe_pieces = all.pieces_all;
+  CdPathStats e;
+  const CdStepSolution same = probe_cd_path(p, 69, set, enough, &e);
+  ASSERT_EQ(same.f.size(), s.f.size());
+  EXPECT_EQ((same.f - s.f).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(same.result.f_crit, s.result.f_crit);
+  EXPECT_FALSE(e.budget_spent);
+  // One piece fewer: the path stops at its last piece, which is counted and not taken, and the
+  // retries at other compliances are not followed.
+  CdPathSettings short_by_one;
+  short_by_one.max_probe_pieces = all.pieces_all - 1;
+  CdPathStats c;
+  const CdStepSolution cut = probe_cd_path(p, 69, set, short_by_one, &c);
+  EXPECT_TRUE(c.budget_spent);
+  EXPECT_EQ(c.failure, "budget");
+  EXPECT_EQ(c.pieces_all, all.pieces_all);
+  EXPECT_EQ(cut.result.sweeps, all.pieces_all);
+  EXPECT_EQ(cut.result.residual, kNoSolution);
+  EXPECT_EQ(cut.f.size(), 0);
+  ASSERT_EQ(c.paths.size(), 1u);
+  EXPECT_EQ(c.paths[0].failure, "budget");
+  // Several paths (the frozen fixture's contact 73: the continuation's lowerings and
+  // restarts): the budget is theirs together, and the probe stops within it.
+  ProbeSettings qs;
+  qs.dt = default_probe_dt(ProbeMethod::kCd, qs.g);
+  CdPathSettings frozen;
+  frozen.start = CdPathStart::compliant;
+  frozen.max_probe_pieces = 3000;
+  CdPathStats f;
+  const CdStepSolution stopped = probe_cd_path(fixture("p100-frozen-mu1"), 73, qs, frozen, &f);
+  EXPECT_TRUE(f.budget_spent);
+  EXPECT_EQ(f.pieces_all, 3001);
+  EXPECT_EQ(stopped.result.sweeps, 3001);
+  long long taken = 0;
+  for (const CdPathAttempt& a : f.paths) taken += a.pieces;
+  EXPECT_EQ(taken, 3000);
+  CdPathSettings bad;
+  bad.max_probe_pieces = -1;
+  EXPECT_THROW(probe_cd_path(p, 69, set, bad), Error);
+}
+
 TEST(CdStep, APerturbedSolutionFailsTheResidualCheck) {
   const Packing& p = fixture("p50-mu1");
   const ProbeSettings set;

@@ -422,6 +422,57 @@ TEST_F(CliProbe, AWindowIsRecordedAndRefusedWhereItDoesNotApply) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
+TEST_F(CliProbe, ABudgetOfPiecesIsRecordedCountedAndLeavesTheOtherProbesAsTheyWere) {
+  // --cd-max-pieces 70 on the seeded sample of 4 (docs/probe.md, "A budget of pieces per
+  // probe"): contacts 42 and 56 take 66 and 65 pieces, 38 and 78 more. The probes within the
+  // budget have the rows of a run without it; the others stop at 71 pieces without a
+  // solution; the summary counts them; the setting is recorded (not resumed without it) and
+  // refused for lp and below 0.
+  const fs::path free = root_ / "budget-free", out = root_ / "budget";
+  for (const fs::path& d : {free, out}) fs::create_directories(d);
+  const std::string args = " --sample 4 --method cd --threads 1 --out ";
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(free) + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --quiet --cd-max-pieces 70 --stop-after 1");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --quiet");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cd_max_pieces"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(out) + " --cd-max-pieces 70");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("at most 70 pieces per probe"), std::string::npos) << r.output;
+  const CsvTable a = CsvTable::read(free / "probes.csv"), b = CsvTable::read(out / "probes.csv");
+  ASSERT_EQ(a.rows(), 4u);
+  ASSERT_EQ(b.rows(), 4u);
+  int stopped = 0;
+  for (std::size_t i = 0; i < a.rows(); ++i) {
+    const long long pieces = a.integer(i, a.column("sweeps"));
+    if (pieces <= 70) {
+      for (std::size_t c = 0; c < a.header().size(); ++c) EXPECT_EQ(b.field(i, c), a.field(i, c)) << i << " " << c;
+    } else {
+      ++stopped;
+      EXPECT_EQ(b.integer(i, b.column("sweeps")), 71) << i;
+      EXPECT_EQ(b.integer(i, b.column("converged")), 0) << i;
+    }
+  }
+  EXPECT_EQ(stopped, 2);
+  EXPECT_NE(r.output.find("stopped by the budget of 70 pieces per probe (--cd-max-pieces): 2 probes"),
+            std::string::npos)
+      << r.output;
+  const nlohmann::json summary = read_json_file(out / "probe_summary.json");
+  EXPECT_EQ(summary["settings"]["cd_max_pieces"].get<long long>(), 70);
+  EXPECT_EQ(summary["over_budget"]["probes"].get<int>(), 2);
+  EXPECT_EQ(summary["without_solution"].get<int>(), 2);
+  r = run_tool("probe " + q(dir_) + " --contact 38 --method cd --cd-max-pieces 70 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("spent the budget of --cd-max-pieces (70 pieces)"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + " --contact 38 --method lp --cd-max-pieces 70 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--cd-max-pieces applies to the cd method"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + " --contact 38 --method cd --cd-max-pieces -1 --out " + q(out));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+}
+
 TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutionsHere) {
   // --method cd --cd-start compliant on a seeded sample of p50-mu0.1: every probe exact, and
   // on this packing the same F_crit as the path from the static network within 1e-3

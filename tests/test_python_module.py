@@ -150,7 +150,7 @@ def signature_defaults(function):
                           "max-steps": "max_steps"}),
     ("probe", unjam.probe, {"method": "method", "g": "g", "velocity-tol": "velocity_tol",
                             "max-sweeps": "max_sweeps", "cd-start": "cd_start",
-                            "cd-softer-starts": "cd_softer_starts"}),
+                            "cd-softer-starts": "cd_softer_starts", "cd-max-pieces": "cd_max_pieces"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -203,6 +203,20 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
         unjam.probe(p, contact=14, method="cd", cd_start="soft")
     with pytest.raises(unjam.Error, match="the cd start 'compliant' applies to the cd method only"):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")
+
+
+def test_a_budget_of_pieces_stops_the_exact_probe_as_the_tool_does(p50, tmp_path):
+    # cd_max_pieces as `unjam probe --cd-max-pieces` (docs/probe.md, "A budget of pieces per
+    # probe"): contact 38 takes 86 pieces; within a budget of 86 it is the same probe, with 70
+    # it stops at the 71st piece without a solution; below 0 is refused.
+    free = unjam.probe(p50, contact=38, method="cd")
+    assert free.converged and free.sweeps == 86
+    same = unjam.probe(p50, contact=38, method="cd", cd_max_pieces=86)
+    assert same.converged and same.f_crit == free.f_crit and same.sweeps == 86
+    cut = unjam.probe(p50, contact=38, method="cd", cd_max_pieces=70)
+    assert not cut.converged and cut.sweeps == 71
+    with pytest.raises(unjam.Error, match="--cd-max-pieces must be >= 0"):
+        unjam.probe(p50, contact=38, method="cd", cd_max_pieces=-1)
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -57,6 +57,7 @@ struct ProbeOptions {
   int stop_after = 0;              // > 0: stop (checkpoint saved) after this many new probes
   std::string partial;             // --partial DIR: the outputs of the checkpoint's probes, to DIR
   int softer_starts = CdPathSettings{}.softer_starts;
+  long long cd_max_pieces = 0;     // > 0: CdPathSettings::max_probe_pieces
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -67,6 +68,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.method = method_from_name(o.method);
   s.cd.start = cd_start_from_name(o.cd_start);
   s.cd.softer_starts = o.softer_starts;
+  s.cd.max_probe_pieces = o.cd_max_pieces;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -120,6 +122,9 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
 // Why the cd path found no solution, where it knows (stats of its first attempt).
 std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
   const std::string why_fails = "; docs/probe.md, \"Why a path fails\"";
+  if (stats.budget_spent)
+    return "its paths spent the budget of --cd-max-pieces (" + std::to_string(stats.pieces_all - 1) +
+           " pieces) before an exact solution; docs/probe.md, \"A budget of pieces per probe\"";
   if (start == CdPathStart::compliant && !stats.paths.empty()) {
     // The continuation: either every path from the static network stopped short of the full
     // opening, or a lowering stopped at a fold and the restarts below it found nothing better.
@@ -366,8 +371,11 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   char window[96] = "";
   if (s.nlgs.window > 0.0)
     std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, omp_get_max_threads(), spread.c_str());
+  char budget[96] = "";
+  if (s.cd.max_probe_pieces > 0 && s.method == ProbeMethod::kCd)
+    std::snprintf(budget, sizeof budget, ", at most %lld pieces per probe", s.cd.max_probe_pieces);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, budget, omp_get_max_threads(), spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
@@ -411,6 +419,11 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   write_file_atomic(out / "response_field.csv", state.average.field_csv());
   write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
   nlohmann::json summary = campaign_summary_json(p, stats, sum);
+  // cd with a budget (recorded in the settings where set): the probes it stopped, whose
+  // sweeps (pieces of all paths) exceed it by the one not taken.
+  const long long max_pieces = settings_json.value("cd_max_pieces", 0LL);
+  const int over_budget = probes_over_budget(state, max_pieces);
+  if (max_pieces > 0) summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget}};
   summary["program_version"] = kVersion;
   summary["command"] = command_line();
   summary["packing"] = o.dir;
@@ -435,6 +448,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");
+  if (max_pieces > 0)
+    std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes\n", max_pieces,
+                over_budget);
   if (o.max_inertia > 0.0)
     std::printf("  left out of the means and averages: %d probes with f_inertia above %g F0 (--max-inertia)\n",
                 sum.inertial, o.max_inertia);
@@ -564,6 +580,13 @@ void add_probe_command(CLI::App& app) {
       "cd, compliant start: where the continuation ends without an exact solution, follow it again from 10x "
       "and then 100x ... its starting compliance, this many times (0: one start; docs/probe.md, \"Where the path "
       "starts\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-max-pieces", o->cd_max_pieces,
+                  "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
+                  "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "
+                  "gives the same bytes with any number of threads (docs/probe.md, \"A budget of pieces per probe\"; "
+                  "0: no limit)")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--window", o->window,

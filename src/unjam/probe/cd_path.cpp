@@ -598,11 +598,19 @@ std::size_t state_key(const std::vector<State>& states, double sigma) {
 }
 
 
+// The pieces a probe has taken over all its paths, against CdPathSettings::max_probe_pieces.
+struct PieceBudget {
+  long long used = 0, limit = 0;  // limit 0: none
+  bool spent() const { return limit > 0 && used > limit; }
+};
+
 // Follows the path from a solution at lambda = 0 (the current states, x0 and x1 solved) to
 // lambda = 1 by parametric principal pivoting; false where it fails (stats.failure says why).
-// Polls `cancel` (may be empty) before every piece and throws Cancelled once it holds.
+// Every piece is counted in `budget`; the piece past its limit is not taken (failure
+// "budget"). Polls `cancel` (may be empty) before every piece and throws Cancelled once it
+// holds.
 bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& ps, Eigen::VectorXd& x0,
-                 Eigen::VectorXd& x1, CdPathStats& stats, const std::function<bool()>& cancel) {
+                 Eigen::VectorXd& x1, CdPathStats& stats, PieceBudget& budget, const std::function<bool()>& cancel) {
   const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * pb.num_contacts() + 1000;
   // sigma = -1 where the path turns back in lambda (a fold: the step has several solutions
   // there, as the dynamics from rest would pass them by).
@@ -626,6 +634,10 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
     // turns back at a fold below lambda = 1 (stats.lambda_max) and returns through lambda < 0
     // to the start from the other side ("loop"; docs/probe.md, "Why a path fails"). Elsewhere
     // the pivoting cycles at a degenerate point, several conditions tight at one lambda.
+    if (++budget.used, budget.spent()) {
+      stats.failure = "budget";
+      return false;
+    }
     const std::size_t key = state_key(path.states(), sigma);
     if (++stats.pieces > max_pieces || !visited.insert(key).second) {
       stats.failure = stats.pieces > max_pieces ? "pieces" : key == start_key ? "loop" : "cycle";
@@ -688,7 +700,7 @@ void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess
 // CdPathSettings); f empty where the first path fails. Every path polls `cancel` (follow_path).
 CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
                       const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats,
-                      const std::function<bool()>& cancel) {
+                      PieceBudget& budget, const std::function<bool()>& cancel) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   // A compliance of CdPathSettings (a fraction of g / (dt^2 F0)) as kappa, and back.
@@ -721,7 +733,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   }
   path.solve(x0, x1);
   path.displacements(x0, x1);
-  if (!follow_path(path, pb, ps, x0, x1, stats, cancel)) {
+  if (!follow_path(path, pb, ps, x0, x1, stats, budget, cancel)) {
     stats.factorizations += path.factorizations();
     return sol;
   }
@@ -755,7 +767,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     path.displacements(x0, x1);
     ++stats.refinements;
     CdPathStats proximal;
-    const bool reached = follow_path(path, pb, ps, x0, x1, proximal, cancel);
+    const bool reached = follow_path(path, pb, ps, x0, x1, proximal, budget, cancel);
     stats.pieces += proximal.pieces;
     stats.degenerate += proximal.degenerate;
     failure = proximal.failure;
@@ -780,7 +792,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
       failed = 0;
       factor = ps.compliance_factor;
       keep_if_better(f_latest);
-    } else if (factorized && ++failed <= ps.lowering_retries) {
+    } else if (factorized && !budget.spent() && ++failed <= ps.lowering_retries) {
       path.restore(held);
       factor = std::sqrt(factor);
     } else {  // the lowering stops here (probe_cd_path restarts below it)
@@ -866,6 +878,9 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     throw Error("cd path: softer_starts must be >= 0 (got " + std::to_string(ps.softer_starts) + ")");
   if (soft && ps.softer_starts > 0 && !(ps.softer_factor > 1.0))
     throw Error("cd path: softer_factor must be > 1 (got " + std::to_string(ps.softer_factor) + ")");
+  if (ps.max_probe_pieces < 0)
+    throw Error("cd path: max_probe_pieces must be >= 0 (got " + std::to_string(ps.max_probe_pieces) + ")");
+  PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
@@ -876,16 +891,17 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   const int starts = soft && ps.retry ? 1 + ps.softer_starts : 1;
   std::vector<CdPathAttempt> paths;
   const auto exact = [&] { return best.f.size() > 0 && best.residual.max() <= kExactStepTolerance; };
-  for (int from = 0; from < starts && !exact(); ++from) {
+  for (int from = 0; from < starts && !exact() && !budget.spent(); ++from) {
     double start = ps.compliant_start * std::pow(ps.softer_factor, from);  // soft: the next path's compliance
     double scaled = 0.0;  // lambda_max / compliance of the last restart that stopped short of lambda = 1
     for (int attempt = 0; attempt < attempts; ++attempt) {
-      if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)))) break;
+      if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)) || budget.spent())) break;
       CdPathStats stats;
       CdPathSettings at = ps;
       if (!soft) at.compliance = compliances[attempt];
       const double path_compliance = soft ? start : at.compliance;
-      CdStepSolution sol = follow(pb, packing, at, guess, path_compliance, at.compliance, stats, settings.cancel);
+      CdStepSolution sol =
+          follow(pb, packing, at, guess, path_compliance, at.compliance, stats, budget, settings.cancel);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
                        stats.failure});
@@ -910,6 +926,10 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
       }
     }
   }
+  best_stats.pieces_all = budget.used;
+  best_stats.budget_spent = budget.spent();
+  // The budget stopped the probe short of an exact solution: that is why it has none.
+  if (best_stats.budget_spent && !exact()) best_stats.failure = "budget";
   best_stats.paths = std::move(paths);
   best_stats.attempts = int(best_stats.paths.size());
   best_stats.restarts = soft ? best_stats.attempts - 1 : 0;  // every attempt after the first
@@ -920,7 +940,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     best_stats.failure = "inexact";
   }
   best.result = cd_step_result(pb, packing, settings, best.f);
-  best.result.sweeps = best_stats.pieces;
+  best.result.sweeps = best_stats.pieces_all;
   if (stats_out) *stats_out = best_stats;
   return best;
 }

@@ -81,6 +81,12 @@ struct CdPathSettings {
   // every restart followed; none without `retry` (docs/probe.md, "Where the path starts").
   int softer_starts = 2;
   double softer_factor = 10.0;
+  // The pieces one probe may take over all its paths (the first, the proximal paths of its
+  // lowerings and refinements, the retries, restarts and softer starts); 0: no limit. Where
+  // they are spent, the probe stops with the best solution met so far, if any (failure
+  // "budget"; CdPathStats::pieces_all is then max_probe_pieces + 1). Deterministic, unlike
+  // a limit in seconds (docs/probe.md, "A budget of pieces per probe").
+  long long max_probe_pieces = 0;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -96,7 +102,9 @@ struct CdPathAttempt {
 };
 
 struct CdPathStats {
-  int pieces = 0;             // linear pieces of the path (state changes)
+  int pieces = 0;             // linear pieces of the returned path (state changes)
+  long long pieces_all = 0;   // pieces of every path of the probe together (ProbeResult::sweeps)
+  bool budget_spent = false;  // the probe stopped at CdPathSettings::max_probe_pieces
   int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
   int refinements = 0;
   int lowerings = 0;          // of them, with the compliance lowered (CdPathStart::compliant)
@@ -110,7 +118,8 @@ struct CdPathStats {
                               // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
-                              // "pieces", "singular", "inexact" (residual above kMaxPathResidual)
+                              // "pieces", "singular", "inexact" (residual above kMaxPathResidual),
+                              // "budget" (max_probe_pieces spent)
   std::vector<CdPathAttempt> paths;  // every path followed, in order (paths.size() == attempts)
 };
 
@@ -128,7 +137,7 @@ struct CdStepGuess {
 CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& step, const ProbeSettings& settings);
 
 // Solves the step of probing packing.contacts[contact] (build_cd_step: settings.g, dt, model).
-// result.sweeps = pieces of the path; result.converged = residual <= kExactStepTolerance.
+// result.sweeps = pieces of all its paths; result.converged = residual <= kExactStepTolerance.
 // A path that exceeds max_pieces, comes back to a state set it left (its start's: a closed
 // branch; another: cycling at a degenerate point), ends on a ray or returns forces with a
 // residual above kMaxPathResidual returns residual kNoSolution. Polls settings.cancel before

@@ -208,6 +208,10 @@ void validate(const CampaignSettings& s) {
   if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
       !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
     throw Error("--cd-softer-starts applies to the cd method's compliant start only");
+  if (s.cd.max_probe_pieces < 0)
+    throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
+  if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
+    throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
@@ -318,6 +322,13 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   return distributor.run(todo, loop);
 }
 
+int probes_over_budget(const CampaignState& state, long long max_pieces) {
+  if (max_pieces <= 0) return 0;
+  int n = 0;
+  for (const ProbeRow& r : state.rows) n += r.sweeps > max_pieces;
+  return n;
+}
+
 CampaignSummary summarize(const Packing& p, const CampaignState& state, std::optional<FitWindow> window,
                           double max_inertia, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;
@@ -386,6 +397,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // Recorded where they apply and are on (0 is the continuation's single start).
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
+    if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
+      j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.nlgs.window > 0.0) j["window_d"] = s.nlgs.window;            // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
