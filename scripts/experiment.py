@@ -95,6 +95,10 @@ def parse_args(argv):
                    "branch from the static network; docs/probe.md, \"Where the path starts\")")
     p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
                    "this many disks (default 500: its reach with friction, docs/probe.md)")
+    p.add_argument("--cd-max-pieces", type=int, help="the exact probe's budget of pieces per "
+                   "probe (`unjam probe --cd-max-pieces`; stopped probes are counted in "
+                   "exact-probe.csv and report.md; default 0: none; docs/probe.md, \"A budget "
+                   "of pieces per probe\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -121,6 +125,8 @@ def parse_args(argv):
         p.error(f"--cd-sample must be >= 0, got {args.cd_sample}")
     if args.cd_max_n is not None and args.cd_max_n < 0:
         p.error(f"--cd-max-n must be >= 0, got {args.cd_max_n}")
+    if args.cd_max_pieces is not None and args.cd_max_pieces < 0:
+        p.error(f"--cd-max-pieces must be >= 0, got {args.cd_max_pieces}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -143,7 +149,7 @@ def main(argv=None):
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
-              "cd_start"):
+              "cd_start", "cd_max_pieces"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

@@ -100,10 +100,12 @@ def exact_probe_section(path, start):
          "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
          "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
          "'not exact': residual above 1e-6 g; 'without a solution': above 1e-3 g, left out of "
-         "the cd means (the near-exact ones are kept).", "",
+         "the cd means (the near-exact ones are kept); 'stopped by the budget': cd probes stopped "
+         "by `--cd-max-pieces`, which are the hardest ones, so the cd means are those of the "
+         "probes solved within it.", "",
          "| mu | N | seeds | probes | not exact | without a solution | <F_crit>/<F_cont> lp | "
-         "<F_crit>/<F_cont> cd | alpha lp | alpha cd | CPU s per cd probe |",
-         "|---|---|---|---|---|---|---|---|---|---|---|"]
+         "<F_crit>/<F_cont> cd | alpha lp | alpha cd | CPU s per cd probe | stopped by the budget |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (mu, n), g in sorted(groups.items()):
         probes = sum(int(r["probes"]) for r in g)
         bad = sum(int(r["not_exact"]) for r in g)
@@ -112,7 +114,8 @@ def exact_probe_section(path, start):
                  + " | ".join(pm(mean(g, c)) for c in ("F_crit_over_F_cont_lp",
                                                        "F_crit_over_F_cont_cd", "alpha_lp",
                                                        "alpha_cd"))
-                 + f" | {mean(g, 'cpu_s_per_probe_cd')[0]:.2f} |")
+                 + f" | {mean(g, 'cpu_s_per_probe_cd')[0]:.2f} | "
+                 + f"{sum(int(r.get('over_budget') or 0) for r in g)} |")
     return L
 
 
@@ -163,6 +166,7 @@ def write_report(path, args, cfg, R, figures, command):
           f"- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
              f"--cd-start {cfg['cd_start']}"
+             + (f", --cd-max-pieces {cfg['cd_max_pieces']}" if cfg.get("cd_max_pieces") else "")
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

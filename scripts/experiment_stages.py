@@ -28,23 +28,29 @@ PY = sys.executable or "/usr/bin/python3"
 # more at 2000 (docs/benchmarks.md, section 10, "Against N, and against the targets";
 # docs/probe.md, "Where the path starts", "What limits it"). cd_start: compliant (exact on
 # 1789 of 1800 probes at 500 disks, "300 probes per packing"), or static (the branch from the
-# static network; without friction the faster, with the same F_crit).
+# static network; without friction the faster, with the same F_crit). cd_max_pieces: the
+# exact probe's budget of pieces per probe (`unjam probe --cd-max-pieces`; 0: none), which
+# bounds its cost at N >= 1000 (docs/probe.md, "A budget of pieces per probe").
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
-             "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant"},
+             "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant", "cd_max_pieces": 0},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
-             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant"},
+             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant",
+             "cd_max_pieces": 0},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
-              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "compliant"},
+              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "compliant",
+              "cd_max_pieces": 0},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
 # cd probes whose step was not solved exactly (residual above 1e-6 g); without_solution: those
 # of them without a solution (residual above 1e-3 g), left out of the cd means (the near-exact
-# ones are kept); alpha empty where the fit failed.
+# ones are kept); alpha empty where the fit failed; over_budget: cd probes stopped by the
+# budget of pieces (cd_max_pieces; 0 without one), with or without a solution.
 EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "without_solution",
                  "F_crit_over_F_cont_lp",
-                 "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd"]
+                 "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd",
+                 "over_budget"]
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
 # F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
@@ -130,14 +136,16 @@ def exact_probe_dirs(d):
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
 
 
-def exact_probe_stage(R, name, d, g, sample, start, dep):
-    """The exact probe (`unjam probe --sample K --method cd --cd-start START`) and the lp probe
-    of the same seeded contacts, into d/exact-cd and d/exact-lp: the paper's probe beside the
-    stand-in."""
+def exact_probe_stage(R, name, d, g, sample, start, dep, max_pieces=0):
+    """The exact probe (`unjam probe --sample K --method cd --cd-start START`, with
+    `--cd-max-pieces` where max_pieces > 0) and the lp probe of the same seeded contacts, into
+    d/exact-cd and d/exact-lp: the paper's probe beside the stand-in."""
     outs = exact_probe_dirs(d)
     args = {m: ["--sample", str(sample), "--seed", "1", "--method", m, "--g", repr(g)]
             for m in outs}
     args["cd"] += ["--cd-start", start]
+    if max_pieces > 0:
+        args["cd"] += ["--cd-max-pieces", str(max_pieces)]
     params = {"commands": [["unjam", "probe", d] + args[m] for m in sorted(outs)],
               "version": R.version}
 
@@ -161,7 +169,8 @@ def exact_row(d, mu, n, seed):
             "F_crit_over_F_cont_lp": repr(float(s["lp"]["F_crit_over_F_cont"])),
             "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
             "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),
-            "cpu_s_per_probe_cd": repr(cpu_per_probe(s["cd"], max(1, s["cd"]["probes"])))}
+            "cpu_s_per_probe_cd": repr(cpu_per_probe(s["cd"], max(1, s["cd"]["probes"]))),
+            "over_budget": s["cd"].get("over_budget", {}).get("probes", 0)}
 
 
 def plot_stage(R, name, outputs, cmds, deps):
@@ -330,7 +339,7 @@ def build(args, cfg, R):
     for p in exact:
         stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
-                                        p["pack"]))
+                                        p["pack"], cfg.get("cd_max_pieces", 0)))
 
     # Fig. 4
     fig4 = os.path.join(out, "fig4-ensemble.png")

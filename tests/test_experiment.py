@@ -255,6 +255,32 @@ class ExperimentTiny(unittest.TestCase):
         self.assertIn("--cd-start compliant", report)
         self.assertIn("| 1 | 100 | 1 | 3 | 0 | 0 | ", report)
 
+    def test_9b_exact_probe_within_a_budget_of_pieces(self):
+        # --cd-max-pieces 2: the exact stages run again with the budget (their command
+        # changed); the probes at mu = 0.1 take 92-158 pieces and are stopped, those at mu = 1
+        # (a sticking network) 2 and are not; the stopped
+        # probes are counted in exact-probe.csv and in the report, which names the budget.
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3", "--cd-max-pieces", "2"))
+        self.assertTrue(all(res[k] == "ran" for k in res if k.startswith("exact ")), res)
+        with open(os.path.join(self.out, "exact-probe.csv")) as f:
+            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        for mu, r in rows.items():
+            d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
+            with open(os.path.join(d, "probe_summary.json")) as f:
+                s = json.load(f)
+            self.assertEqual(s["settings"]["cd_max_pieces"], 2)
+            self.assertEqual(int(r["over_budget"]), s["over_budget"]["probes"], mu)
+            with open(os.path.join(d, "probes.csv")) as f:
+                sweeps = [int(p["sweeps"]) for p in csv.DictReader(f)]
+            self.assertEqual(s["over_budget"]["probes"], sum(k == 3 for k in sweeps), mu)
+            self.assertTrue(all(k <= 3 for k in sweeps), (mu, sweeps))
+        self.assertEqual(int(rows["0.1"]["over_budget"]), 3)
+        self.assertEqual(int(rows["1"]["over_budget"]), 0)
+        with open(os.path.join(self.out, "report.md")) as f:
+            report = f.read()
+        self.assertIn("--cd-max-pieces 2", report)
+        self.assertIn("| stopped by the budget |", report)
+
 
 class ExactProbeTable(unittest.TestCase):
     """exact-probe.csv and its report section, from synthetic probe summaries: the cd probes
@@ -275,11 +301,13 @@ class ExactProbeTable(unittest.TestCase):
                          "without_solution": none if m == "cd" else 0,
                          "F_crit_over_F_cont": 1.5 if m == "cd" else 2.0, "alpha": 0.5,
                          "ranks": [{"busy_seconds": 3000.0}]}
+                    if m == "cd" and seed == 2:  # a budget stopped 2 (a summary without one: 0)
+                        s["over_budget"] = {"max_pieces": 100, "probes": 2}
                     with open(os.path.join(o, "probe_summary.json"), "w") as f:
                         json.dump(s, f)
                 rows.append(experiment_stages.exact_row(d, 0.5, 500, seed))
-            self.assertEqual([(r["not_exact"], r["without_solution"]) for r in rows],
-                             [(5, 2), (3, 1)])
+            self.assertEqual([(r["not_exact"], r["without_solution"], r["over_budget"])
+                              for r in rows], [(5, 2, 0), (3, 1, 2)])
             table = os.path.join(tmp, "exact-probe.csv")
             with open(table, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
@@ -289,6 +317,8 @@ class ExactProbeTable(unittest.TestCase):
             self.assertIn("| without a solution |", report)
             self.assertIn("| 0.5 | 500 | 2 | 600 | 8 | 3 | 2.0000 ± 0.0000 | 1.5000 ± 0.0000 |",
                           report)
+            self.assertTrue(any(line.startswith("| 0.5 | 500 |") and line.endswith("| 2 |")
+                                for line in report.splitlines()), report)
 
 
 @requires_unjam
@@ -301,7 +331,8 @@ class ExperimentArguments(unittest.TestCase):
             for extra, phrase in [(["--seeds", "-1"], "--seeds"), (["--mus", "0.1", "nan"], "--mus"),
                                   (["--mus", "-1"], "--mus"), (["--ns", "2"], "at least 8"),
                                   (["--samples", "0"], "--samples"), (["--probe-g", "nan"], "--probe-g"),
-                                  (["--probe-g", "-1e-9"], "--probe-g")]:
+                                  (["--probe-g", "-1e-9"], "--probe-g"),
+                                  (["--cd-max-pieces", "-1"], "--cd-max-pieces")]:
                 p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out,
                                     "--unjam", UNJAM, *extra],
                                    capture_output=True, text=True, cwd=REPO, timeout=60)
