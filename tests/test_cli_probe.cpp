@@ -404,6 +404,8 @@ TEST_F(CliProbe, AWindowIsRecordedAndRefusedWhereItDoesNotApply) {
   r = run_tool("probe " + q(dir_) + args + " --window 2.5");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(read_json_file(out / "probe_summary.json")["settings"]["window_d"].get<double>(), 2.5);
+  EXPECT_NE(r.output.find("d(r) and alpha are those of windows of 2.5 mean diameters"), std::string::npos)
+      << r.output;
   const CsvTable rows = CsvTable::read(out / "probes.csv");
   ASSERT_EQ(rows.rows(), 4u);
   for (std::size_t i = 0; i < rows.rows(); ++i) EXPECT_EQ(rows.integer(i, rows.column("converged")), 1) << i;

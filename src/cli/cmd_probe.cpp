@@ -466,6 +466,11 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);
   else
     std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
+  // A windowed campaign's fields are zero beyond the window: its d(r) is the clamp's.
+  if (const double window = settings_json.value("window_d", 0.0); window > 0.0)
+    std::printf("  d(r) and alpha are those of windows of %g mean diameters, every grain beyond clamped: not the "
+                "whole packing's decay (docs/probe.md, \"A window around the probed pair\")\n",
+                window);
   const CampaignTime& all = time.all_runs;
   if (all.runs > 1 || all.untimed > 0 || planned > 0) {
     std::printf("  over %d run%s: %s of wall time, %s busy", all.runs, all.runs == 1 ? "" : "s",
