@@ -32,6 +32,20 @@ const Packing& fixture(const std::string& name) {
   return it->second;
 }
 
+// The exact probe's default step (the quasi-static dt) and the compliant continuation with
+// `softer_starts` softer starts.
+ProbeSettings quasi_static_step() {
+  ProbeSettings s;
+  s.dt = default_probe_dt(ProbeMethod::kCd, s.g);
+  return s;
+}
+CdPathSettings compliant(int softer_starts = CdPathSettings{}.softer_starts) {
+  CdPathSettings c;
+  c.start = CdPathStart::compliant;
+  c.softer_starts = softer_starts;
+  return c;
+}
+
 // contact -> F_crit of the solution reached from the static state (simulation units).
 // Column `column` of cd-reference.csv (1: F_crit from the static state, 2: the other exact
 // solution, where there is one), by contact.
@@ -344,11 +358,8 @@ TEST(CdPath, SofterStartsSolveWhereTheFirstStartsContinuationFindsNone) {
   // quasi-static step: the continuation from compliance 0.1 and its restarts find no solution
   // (docs/probe.md, "Where the path starts"); followed again from compliance 1 it is exact.
   const Packing& p = fixture("p100-frozen-mu1");
-  ProbeSettings qs;
-  qs.dt = default_probe_dt(ProbeMethod::kCd, qs.g);
-  CdPathSettings one;
-  one.start = CdPathStart::compliant;
-  one.softer_starts = 0;
+  const ProbeSettings qs = quasi_static_step();
+  const CdPathSettings one = compliant(0);
   CdPathStats first;
   const CdStepSolution none = probe_cd_path(p, 68, qs, one, &first);
   EXPECT_EQ(none.f.size(), 0);
@@ -488,13 +499,10 @@ TEST(CdPath, ABudgetOfPiecesStopsTheProbeAndOneItDoesNotReachChangesNothing) {
   EXPECT_EQ(c.paths[0].failure, "budget");
   // Several paths (the frozen fixture's contact 73: the continuation's lowerings and
   // restarts): the budget is theirs together, and the probe stops within it.
-  ProbeSettings qs;
-  qs.dt = default_probe_dt(ProbeMethod::kCd, qs.g);
-  CdPathSettings frozen;
-  frozen.start = CdPathStart::compliant;
+  CdPathSettings frozen = compliant();
   frozen.max_probe_pieces = 3000;
   CdPathStats f;
-  const CdStepSolution stopped = probe_cd_path(fixture("p100-frozen-mu1"), 73, qs, frozen, &f);
+  const CdStepSolution stopped = probe_cd_path(fixture("p100-frozen-mu1"), 73, quasi_static_step(), frozen, &f);
   EXPECT_TRUE(f.budget_spent);
   EXPECT_EQ(f.pieces_all, 3001);
   EXPECT_EQ(stopped.result.sweeps, 3001);

@@ -430,17 +430,18 @@ TEST_F(CliProbe, ABudgetOfPiecesIsRecordedCountedAndLeavesTheOtherProbesAsTheyWe
   // budget have the rows of a run without it; the others stop at 71 pieces without a
   // solution; the summary counts them; the setting is recorded (not resumed without it) and
   // refused for lp and below 0.
+  const auto campaign = [&](const fs::path& out, const std::string& extra) {
+    fs::create_directories(out);
+    return run_tool("probe " + q(dir_) + " --sample 4 --method cd --threads 1 --out " + q(out) + extra);
+  };
   const fs::path free = root_ / "budget-free", out = root_ / "budget";
-  for (const fs::path& d : {free, out}) fs::create_directories(d);
-  const std::string args = " --sample 4 --method cd --threads 1 --out ";
-  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(free) + " --quiet");
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = run_tool("probe " + q(dir_) + args + q(out) + " --quiet --cd-max-pieces 70 --stop-after 1");
+  ASSERT_EQ(campaign(free, " --quiet").exit_code, 0);
+  testing::ToolRun r = campaign(out, " --quiet --cd-max-pieces 70 --stop-after 1");
   ASSERT_EQ(r.exit_code, 3) << r.output;
-  r = run_tool("probe " + q(dir_) + args + q(out) + " --quiet");
+  r = campaign(out, " --quiet");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("cd_max_pieces"), std::string::npos) << r.output;
-  r = run_tool("probe " + q(dir_) + args + q(out) + " --cd-max-pieces 70");
+  r = campaign(out, " --cd-max-pieces 70");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("at most 70 pieces per probe"), std::string::npos) << r.output;
   const CsvTable a = CsvTable::read(free / "probes.csv"), b = CsvTable::read(out / "probes.csv");
