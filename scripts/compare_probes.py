@@ -209,8 +209,12 @@ def check_same_packing(cd, lp):
     """Both runs of a pair made from one packing (UserError naming the difference)."""
     s_cd, s_lp = cd["summary"], lp["summary"]
     where = f"{cd['dir']} and {lp['dir']} come from different packings"
+    # The packing as given on each run's command line: a relative path is relative to a
+    # directory the summary does not record, so it is compared by its last component only
+    # (the packing's numbers and contacts below still have to agree).
     p_cd, p_lp = os.path.normpath(s_cd["packing"]), os.path.normpath(s_lp["packing"])
-    if p_cd != p_lp:
+    both_absolute = os.path.isabs(p_cd) and os.path.isabs(p_lp)
+    if (p_cd != p_lp if both_absolute else os.path.basename(p_cd) != os.path.basename(p_lp)):
         raise UserError(f"{where}: packing {s_cd['packing']} and {s_lp['packing']}")
     for key in ("N", "mu", "seed"):
         if key in s_cd and key in s_lp and not _same_value(s_cd[key], s_lp[key]):

@@ -375,6 +375,26 @@ class ComparePairs(unittest.TestCase):
             self.assertClose(float(read_rows(os.path.join(out, "compare.csv"))[0]["cpu_s_per_probe_cd"]),
                              cpu, name)
 
+    def test_12_a_relative_packing_path_names_the_same_packing(self):
+        # A campaign run from the packing's parent directory records `p50-mu1`, another run
+        # elsewhere the absolute path: the same packing (its numbers and contacts agree);
+        # the results are those of the pair as it was.
+        lp = copy_campaign(R["lp"]["p50-mu1"], "lp-relative-path",
+                           edit_summary=lambda s: s.update(packing="p50-mu1"))
+        out = os.path.join(R["tmp"], "compare-relative")
+        p = run(R["cd"]["p50-mu1"], lp, "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        row = read_rows(os.path.join(out, "compare.csv"))[0]
+        first = R["compare"][0]  # the pair p50-mu1 of setUpModule
+        self.assertTrue(first["packing"].endswith("p50-mu1"), first)
+        for key in ("probes", "solved", "F_crit_over_F_cont_cd", "F_crit_over_F_cont_lp", "ratio_median"):
+            self.assertEqual(row[key], first[key], key)
+        other = copy_campaign(R["lp"]["p50-mu1"], "lp-relative-other",
+                              edit_summary=lambda s: s.update(packing="p50-mu0.1"))
+        p = run(R["cd"]["p50-mu1"], other, "--out", out)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("come from different packings: packing ", p.stderr)
+
     def test_7_errors_write_nothing(self):
         cd1, lp1 = R["cd"]["p50-mu1"], R["lp"]["p50-mu1"]
         cd01, lp01 = R["cd"]["p50-mu0.1"], R["lp"]["p50-mu0.1"]
