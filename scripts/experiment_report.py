@@ -166,7 +166,7 @@ def write_report(path, args, cfg, R, figures, command):
           f"- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
              f"--cd-start {cfg['cd_start']}"
-             + (f", --cd-max-pieces {cfg['cd_max_pieces']}" if cfg.get("cd_max_pieces") else "")
+             + (f", --cd-max-pieces {cfg['cd_max_pieces']}" if cfg["cd_max_pieces"] else "")
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

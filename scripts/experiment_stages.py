@@ -136,7 +136,7 @@ def exact_probe_dirs(d):
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
 
 
-def exact_probe_stage(R, name, d, g, sample, start, dep, max_pieces=0):
+def exact_probe_stage(R, name, d, g, sample, start, dep, max_pieces):
     """The exact probe (`unjam probe --sample K --method cd --cd-start START`, with
     `--cd-max-pieces` where max_pieces > 0) and the lp probe of the same seeded contacts, into
     d/exact-cd and d/exact-lp: the paper's probe beside the stand-in."""
@@ -339,7 +339,7 @@ def build(args, cfg, R):
     for p in exact:
         stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
-                                        p["pack"], cfg.get("cd_max_pieces", 0)))
+                                        p["pack"], cfg["cd_max_pieces"]))
 
     # Fig. 4
     fig4 = os.path.join(out, "fig4-ensemble.png")

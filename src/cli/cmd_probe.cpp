@@ -120,10 +120,11 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
 }
 
 // Why the cd path found no solution, where it knows (stats of its first attempt).
-std::string cd_failure_hint(const CdPathStats& stats, CdPathStart start) {
+std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) {
   const std::string why_fails = "; docs/probe.md, \"Why a path fails\"";
+  const CdPathStart start = cd.start;
   if (stats.budget_spent)
-    return "its paths spent the budget of --cd-max-pieces (" + std::to_string(stats.pieces_all - 1) +
+    return "its paths spent the budget of --cd-max-pieces (" + std::to_string(cd.max_probe_pieces) +
            " pieces) before an exact solution; docs/probe.md, \"A budget of pieces per probe\"";
   if (start == CdPathStart::compliant && !stats.paths.empty()) {
     // The continuation: either every path from the static network stopped short of the full
@@ -254,7 +255,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
   print_cd_paths(stats);
-  if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd.start)));
+  if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd)));
 }
 
 std::optional<FitWindow> fit_window(const ProbeOptions& o) {
@@ -372,7 +373,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   if (s.nlgs.window > 0.0)
     std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
   char budget[96] = "";
-  if (s.cd.max_probe_pieces > 0 && s.method == ProbeMethod::kCd)
+  if (s.cd.max_probe_pieces > 0)  // cd only (validate)
     std::snprintf(budget, sizeof budget, ", at most %lld pieces per probe", s.cd.max_probe_pieces);
   std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s, %d threads%s\n", total,
                o.dir.c_str(), o.method.c_str(), window, budget, omp_get_max_threads(), spread.c_str());

@@ -634,7 +634,8 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
     // turns back at a fold below lambda = 1 (stats.lambda_max) and returns through lambda < 0
     // to the start from the other side ("loop"; docs/probe.md, "Why a path fails"). Elsewhere
     // the pivoting cycles at a degenerate point, several conditions tight at one lambda.
-    if (++budget.used, budget.spent()) {
+    ++budget.used;
+    if (budget.spent()) {
       stats.failure = "budget";
       return false;
     }

@@ -189,12 +189,12 @@ std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSe
                                         const std::function<bool()>& should_stop = {},
                                         const std::function<void(int, int)>& progress = {});
 
-// The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
-// The means take the probes that enter_averages with max_inertia (the campaign's setting).
 // The cd probes of `state` stopped by a budget of max_pieces pieces per probe
 // (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1); 0 where max_pieces <= 0.
 int probes_over_budget(const CampaignState& state, long long max_pieces);
 
+// The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
+// The means take the probes that enter_averages with max_inertia (the campaign's setting).
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
                           std::optional<FitWindow> window = std::nullopt, double max_inertia = 0.0,
                           int bootstrap_samples = 200, std::uint64_t seed = 1);
