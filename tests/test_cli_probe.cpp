@@ -424,6 +424,69 @@ TEST_F(CliProbe, AWindowIsRecordedAndRefusedWhereItDoesNotApply) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
 }
 
+TEST_F(CliProbe, TheExactStepsForcesFileHoldsASolutionAnyoneCanCheck) {
+  // probe-K-forces.csv (docs/probe.md, "Which contacts the step opens and sets sliding"): per
+  // contact the packing's fn0, the step's forces, its displacements in g and its state. Read
+  // alone, they satisfy Signorini's and Coulomb's conditions with non-dilatant sliding to the
+  // exactness tolerance, the states follow the stated rule, and the summary's counts are the
+  // file's. Contact 5 opens two contacts and slides 29; contact 1 opens none.
+  const double tol = 1e-6, F0v = F0(), mu = read_json_file(dir_ / "meta.json")["mu"].get<double>();
+  const CsvTable packing = CsvTable::read(dir_ / "contacts.csv");
+  for (const int k : {1, 5}) {
+    const fs::path single = root_ / ("states-" + std::to_string(k));
+    fs::create_directories(single);
+    const testing::ToolRun r =
+        run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --out " + q(single));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const CsvTable t = CsvTable::read(single / ("probe-" + std::to_string(k) + "-forces.csv"));
+    ASSERT_EQ(t.rows(), packing.rows());
+    const std::size_t cfn0 = t.column("fn0"), cfn = t.column("fn"), cft = t.column("ft"), cun = t.column("un"),
+                      cut = t.column("ut"), cst = t.column("state");
+    int loaded = 0, opened = 0, sliding = 0, closed = 0, probed_rows = 0;
+    for (std::size_t i = 0; i < t.rows(); ++i) {
+      const int contact = static_cast<int>(t.integer(i, t.column("contact")));
+      const double fn0 = t.number(i, cfn0), fn = t.number(i, cfn), ft = t.number(i, cft);
+      const double un = t.number(i, cun), ut = t.number(i, cut);
+      const std::string state(t.field(i, cst));
+      EXPECT_EQ(fn0, packing.number(static_cast<std::size_t>(contact), packing.column("fn"))) << contact;
+      EXPECT_GE(fn, 0.0) << contact;
+      EXPECT_GE(un, -tol) << contact;                                 // no penetration
+      if (fn > tol * F0v) EXPECT_LE(un, tol) << contact;              // a loaded pair stays closed
+      EXPECT_LE(std::abs(ft), mu * fn + tol * F0v) << contact;        // inside the cone
+      EXPECT_EQ(state == "open", fn <= tol * F0v) << contact << " " << state;
+      if (state == "slide") {                                         // slips against its force, at the edge
+        EXPECT_GT(std::abs(ut), tol) << contact;
+        EXPECT_GE(std::abs(ft), mu * fn - tol * F0v) << contact;
+        EXPECT_LE(ft * ut, 0.0) << contact;
+      } else {
+        EXPECT_TRUE(state == "stick" || state == "open") << contact << " " << state;
+        if (state == "stick") EXPECT_LE(std::abs(ut), tol) << contact;
+      }
+      if (contact == k) {
+        ++probed_rows;
+        EXPECT_NEAR(fn / F0v, printed_value(r.output, "F_crit / F0"), 1e-6);
+        EXPECT_NEAR(un, 0.0, tol);  // the probed pair opens by g
+        continue;
+      }
+      if (fn0 > tol * F0v) {
+        ++loaded;
+        opened += state == "open";
+        sliding += state == "slide";
+      } else {
+        closed += state != "open";
+      }
+    }
+    EXPECT_EQ(probed_rows, 1);
+    const std::string said = "of the " + std::to_string(loaded) + " other contacts loaded in the packing the step opens " +
+                             std::to_string(opened) + " and slides " + std::to_string(sliding) + " (|u_t| > 1e-06 g), and " +
+                             std::to_string(closed) + " of the " +
+                             std::to_string(static_cast<int>(t.rows()) - 1 - loaded) + " without force close";
+    EXPECT_NE(r.output.find(said), std::string::npos) << said << "\n" << r.output;
+    EXPECT_EQ(opened, k == 5 ? 2 : 0);
+    EXPECT_EQ(sliding, k == 5 ? 29 : 31);
+  }
+}
+
 TEST_F(CliProbe, ABudgetOfPiecesIsRecordedCountedAndLeavesTheOtherProbesAsTheyWere) {
   // --cd-max-pieces 70 on the seeded sample of 4 (docs/probe.md, "A budget of pieces per
   // probe"): contacts 42 and 56 take 66 and 65 pieces, 38 and 78 more. The probes within the

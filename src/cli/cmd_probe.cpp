@@ -107,15 +107,19 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
   return w.str();
 }
 
-// The exact step also writes its contact forces (probe-K-forces.csv), so that the solution
-// can be checked by anyone.
+// The exact step also writes its contact forces, displacements and states
+// (probe-K-forces.csv), so that the solution can be checked by anyone, and says which
+// contacts it changes (`changes`, where it has forces).
 ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s, int contact,
-                                    const fs::path& out, CdPathStats& stats) {
+                                    const fs::path& out, CdPathStats& stats,
+                                    std::optional<StepStateChanges>& changes) {
   const CdStepSolution sol = s.method == ProbeMethod::kLemke ? probe_cd_lemke(p, contact, s.nlgs)
                                                              : probe_cd_path(p, contact, s.nlgs, s.cd, &stats);
-  if (sol.f.size() > 0)
-    write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"),
-                      step_forces_csv(build_cd_step(p, contact, s.nlgs), p, sol.f));
+  if (sol.f.size() > 0) {
+    const CdStepProblem step = build_cd_step(p, contact, s.nlgs);
+    write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"), step_forces_csv(step, p, sol.f));
+    changes = step_state_changes(step, p, sol.f);
+  }
   return sol.result;
 }
 
@@ -238,8 +242,10 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
     std::fflush(stdout);
   }
   CdPathStats stats;
+  std::optional<StepStateChanges> changes;
   const CampaignSettings st = with_running(s, o.contact, running_printer(o, ""), o.running_every);
-  const ProbeResult r = exact ? probe_exact_with_forces(p, st, o.contact, out, stats) : probe_contact(p, st, o.contact);
+  const ProbeResult r =
+      exact ? probe_exact_with_forces(p, st, o.contact, out, stats, changes) : probe_contact(p, st, o.contact);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_single(out, p, r);
   const double F0 = p.force_unit();
@@ -254,6 +260,12 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
     std::printf("  inertia of the step (largest net force on a grain) / F0 %.3e\n", r.f_inertia / F0);
   std::printf("  %s, displacement field written to %s\n", format_duration(wall).c_str(),
               (out / ("probe-" + std::to_string(r.contact) + ".csv")).c_str());
+  if (changes)
+    std::printf("  of the %d other contacts loaded in the packing the step opens %d and slides %d (|u_t| > %g g), "
+                "and %d of the %d without force close; forces, displacements and states in %s\n",
+                changes->loaded, changes->opened, changes->sliding, kExactStepTolerance, changes->closed,
+                changes->contacts - changes->loaded,
+                (out / ("probe-" + std::to_string(r.contact) + "-forces.csv")).c_str());
   print_cd_paths(stats);
   if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd)));
 }

@@ -240,11 +240,53 @@ ProbeResult cd_step_result(const CdStepProblem& pb, const Packing& packing,
   return r;
 }
 
+const char* step_state_name(StepState state) {
+  switch (state) {
+    case StepState::open: return "open";
+    case StepState::stick: return "stick";
+    case StepState::slide: return "slide";
+  }
+  return "?";
+}
+
+std::vector<StepState> step_states(const CdStepProblem& pb, const Eigen::VectorXd& f) {
+  const Eigen::VectorXd u = pb.relative_displacement(f);
+  const double tol = kExactStepTolerance, F0 = pb.system.F0;
+  std::vector<StepState> states(pb.num_contacts());
+  for (int k = 0; k < pb.num_contacts(); ++k) {
+    if (f[2 * k] <= tol * F0) states[k] = StepState::open;
+    else if (std::abs(u[2 * k + 1]) > tol * pb.g) states[k] = StepState::slide;
+    else states[k] = StepState::stick;
+  }
+  return states;
+}
+
+StepStateChanges step_state_changes(const CdStepProblem& pb, const Packing& packing, const Eigen::VectorXd& f) {
+  const std::vector<StepState> states = step_states(pb, f);
+  const double tol = kExactStepTolerance, F0 = pb.system.F0;
+  StepStateChanges c;
+  for (int k = 0; k < pb.num_contacts(); ++k) {
+    if (k == pb.probed) continue;
+    ++c.contacts;
+    if (packing.contacts[pb.system.contacts[k]].fn > tol * F0) {
+      ++c.loaded;
+      if (states[k] == StepState::open) ++c.opened;
+      if (states[k] == StepState::slide) ++c.sliding;
+    } else if (states[k] != StepState::open) {
+      ++c.closed;
+    }
+  }
+  return c;
+}
+
 std::string step_forces_csv(const CdStepProblem& pb, const Packing& packing, const Eigen::VectorXd& f) {
-  CsvWriter w({"contact", "a", "b", "fn", "ft"});
+  const Eigen::VectorXd u = pb.relative_displacement(f);
+  const std::vector<StepState> states = step_states(pb, f);
+  CsvWriter w({"contact", "a", "b", "fn0", "fn", "ft", "un", "ut", "state"});
   for (int k = 0; k < pb.num_contacts(); ++k) {
     const Contact& c = packing.contacts[pb.system.contacts[k]];
-    w.cell(pb.system.contacts[k]).cell(c.a).cell(c.b).cell(f[2 * k]).cell(f[2 * k + 1]);
+    w.cell(pb.system.contacts[k]).cell(c.a).cell(c.b).cell(c.fn).cell(f[2 * k]).cell(f[2 * k + 1]);
+    w.cell(u[2 * k] / pb.g).cell(u[2 * k + 1] / pb.g).cell(std::string_view(step_state_name(states[k])));
     w.end_row();
   }
   return w.str();

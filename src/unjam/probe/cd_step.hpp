@@ -5,7 +5,9 @@
 // The step is the packing's contact problem (contact/contact_problem.hpp: every contact, its
 // g_eff, masses, dt, the bath) in which the probed contact must open by g: its g_eff is -g.
 // The static network f0 solves the step with g = 0 (A f0 = b gives U = 0).
+#include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -77,7 +79,29 @@ CdStepSolution probe_cd_lemke(const Packing& packing, int contact, const ProbeSe
 ProbeResult cd_step_result(const CdStepProblem& problem, const Packing& packing,
                            const ProbeSettings& settings, const Eigen::VectorXd& f);
 
-// The forces of a probe as a table a, b, fn, ft (every contact of the packing).
+// A contact's state in a step's solution f, read with the tolerance of the exactness verdict
+// (kExactStepTolerance, in F0 and in g): open where fn <= tol F0, sliding where it carries a
+// force and slips, |u_t| > tol g, sticking otherwise (docs/probe.md, "Which contacts the step
+// opens and sets sliding"). The probed contact is loaded by F_crit and its state is stick or
+// slide like any other's.
+enum class StepState : std::int8_t { open, stick, slide };
+const char* step_state_name(StepState state);
+std::vector<StepState> step_states(const CdStepProblem& problem, const Eigen::VectorXd& f);
+
+// What a step's solution changes against the static network, over every contact but the
+// probed one: `loaded` contacts carry a force in the packing (fn > tol F0, tol as above); of
+// them `opened` are open in the step, `sliding` slide; `closed` carried none and carry one.
+struct StepStateChanges {
+  int contacts = 0, loaded = 0, opened = 0, sliding = 0, closed = 0;
+};
+StepStateChanges step_state_changes(const CdStepProblem& problem, const Packing& packing,
+                                    const Eigen::VectorXd& f);
+
+// The forces of a probe as a table (every contact of the step, in its order): contact, a, b;
+// fn0, the static network's normal force (the packing's); fn, ft, the step's forces; un, ut,
+// the step's displacements u = A^T q + g_eff in units of g (un: the pair's gap after the step
+// as Signorini reads it, 0 where closed; the probed pair's is its opening minus g, 0); state,
+// as step_states.
 std::string step_forces_csv(const CdStepProblem& problem, const Packing& packing,
                             const Eigen::VectorXd& f);
 
