@@ -485,6 +485,35 @@ TEST_F(CliProbe, TheExactStepsForcesFileHoldsASolutionAnyoneCanCheck) {
     EXPECT_EQ(opened, k == 5 ? 2 : 0);
     EXPECT_EQ(sliding, k == 5 ? 29 : 31);
   }
+  // A campaign's probes.csv carries the same two counts per probe (opened, sliding; empty for
+  // lp), and its summary their medians: the seeded sample's contact 56 as a single probe.
+  const fs::path campaign = root_ / "states-campaign", lp = root_ / "states-lp", single = root_ / "states-56";
+  for (const fs::path& d : {campaign, lp, single}) fs::create_directories(d);
+  testing::ToolRun r = run_tool("probe " + q(dir_) + " --sample 4 --seed 1 --method cd --threads 2 --out " + q(campaign));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("that the step opens / sets sliding: median 1 / 27.5 over 4 probes"), std::string::npos)
+      << r.output;
+  const CsvTable rows = CsvTable::read(campaign / "probes.csv");
+  ASSERT_EQ(rows.rows(), 4u);
+  std::size_t at56 = rows.rows();
+  for (std::size_t i = 0; i < rows.rows(); ++i)
+    if (rows.integer(i, rows.column("contact")) == 56) at56 = i;
+  ASSERT_LT(at56, rows.rows());
+  r = run_tool("probe " + q(dir_) + " --contact 56 --method cd --out " + q(single));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string said = "the step opens " + std::string(rows.field(at56, rows.column("opened"))) + " and slides " +
+                           std::string(rows.field(at56, rows.column("sliding"))) + " (";
+  EXPECT_NE(r.output.find(said), std::string::npos) << said << "\n" << r.output;
+  EXPECT_EQ(rows.integer(at56, rows.column("opened")), 6);
+  EXPECT_EQ(read_json_file(campaign / "probe_summary.json")["step_states"]["probes"].get<int>(), 4);
+  r = run_tool("probe " + q(dir_) + " --sample 2 --seed 1 --method lp --quiet --out " + q(lp));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CsvTable lp_rows = CsvTable::read(lp / "probes.csv");
+  for (std::size_t i = 0; i < lp_rows.rows(); ++i) {
+    EXPECT_EQ(lp_rows.field(i, lp_rows.column("opened")), "");
+    EXPECT_EQ(lp_rows.field(i, lp_rows.column("sliding")), "");
+  }
+  EXPECT_FALSE(read_json_file(lp / "probe_summary.json").contains("step_states"));
 }
 
 TEST_F(CliProbe, ABudgetOfPiecesIsRecordedCountedAndLeavesTheOtherProbesAsTheyWere) {

@@ -480,7 +480,8 @@ TEST(ProbeCampaign, InertiaOfTheStepIsSummarisedAndSurvivesTheCheckpoint) {
   EXPECT_TRUE(std::isnan(back.rows[2].f_inertia));
   for (int k : {0, 1, 3, 4}) EXPECT_EQ(back.rows[k].f_inertia, st.rows[k].f_inertia);
   nlohmann::json older = saved;
-  for (auto& r : older["rows"]) r.erase(10);
+  for (auto& r : older["rows"])
+    for (const int i : {12, 11, 10}) r.erase(i);
   const CampaignState old_state = campaign_state_from_json(older, p);
   for (const ProbeRow& r : old_state.rows) EXPECT_TRUE(std::isnan(r.f_inertia));
   nlohmann::json bad = saved;
@@ -488,6 +489,53 @@ TEST(ProbeCampaign, InertiaOfTheStepIsSummarisedAndSurvivesTheCheckpoint) {
   EXPECT_THROW(campaign_state_from_json(bad, p), Error);
   bad = saved;
   bad["rows"][0].push_back(1.0);
+  EXPECT_THROW(campaign_state_from_json(bad, p), Error);
+}
+
+// The contacts a step opens and sets sliding (ProbeRow::opened, sliding) in the summary: their
+// medians over the rows that have them (-1: lp, nlgs, no solution); in the checkpoint as two
+// integers after f_inertia, and a row of 11 values (a checkpoint written before them) resumes
+// with -1.
+TEST(ProbeCampaign, TheContactsAStepChangesAreSummarisedAndSurviveTheCheckpoint) {
+  const Packing& p = fixture_p50();
+  CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  const std::vector<int> opened{2, -1, 0, 5, 1}, sliding{30, -1, 26, 28, 40};
+  for (int k = 0; k < 5; ++k)
+    st.rows.push_back({k, p.contacts[k].a, p.contacts[k].b, 1.0, 1.0, true, 1, 0.0, 0, 0.0, 1e-5, opened[k],
+                       sliding[k]});
+  const CampaignSummary sum = summarize(p, st);
+  EXPECT_EQ(sum.state_probes, 4);
+  EXPECT_DOUBLE_EQ(sum.opened_median, 1.5);   // of 0, 1, 2, 5
+  EXPECT_DOUBLE_EQ(sum.sliding_median, 29.0);  // of 26, 28, 30, 40
+  const nlohmann::json j = campaign_summary_json(p, PackingStats{}, sum);
+  EXPECT_EQ(j.at("step_states").at("probes").get<int>(), 4);
+  EXPECT_DOUBLE_EQ(j.at("step_states").at("sliding_median").get<double>(), 29.0);
+
+  const nlohmann::json saved = to_json(st);
+  ASSERT_EQ(saved["rows"][0].size(), 13u);
+  const CampaignState back = campaign_state_from_json(saved, p);
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(back.rows[k].opened, opened[k]) << k;
+    EXPECT_EQ(back.rows[k].sliding, sliding[k]) << k;
+  }
+  nlohmann::json older = saved;
+  for (auto& r : older["rows"])
+    for (const int i : {12, 11}) r.erase(i);
+  for (const ProbeRow& r : campaign_state_from_json(older, p).rows) {
+    EXPECT_EQ(r.opened, -1);
+    EXPECT_EQ(r.sliding, -1);
+    EXPECT_EQ(r.f_inertia, 1e-5);
+  }
+  EXPECT_EQ(summarize(p, campaign_state_from_json(older, p)).state_probes, 0);
+  EXPECT_FALSE(campaign_summary_json(p, PackingStats{}, summarize(p, campaign_state_from_json(older, p)))
+                   .contains("step_states"));
+  for (const nlohmann::json& value : {nlohmann::json(-2), nlohmann::json(1.5), nlohmann::json("many")}) {
+    nlohmann::json bad = saved;
+    bad["rows"][0][12] = value;
+    EXPECT_THROW(campaign_state_from_json(bad, p), Error) << value;
+  }
+  nlohmann::json bad = saved;
+  bad["rows"][0].erase(12);  // 12 values: neither an older row nor a whole one
   EXPECT_THROW(campaign_state_from_json(bad, p), Error);
 }
 

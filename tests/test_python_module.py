@@ -195,8 +195,14 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
     rows = read_csv(tmp_path / "probe-14.csv")
     compliant = unjam.probe(p, contact=14, method="cd", cd_start="compliant")
     assert [[float(x["ux"]), float(x["uy"])] for x in rows] == compliant.u.tolist()
-    forces = {int(x["contact"]): float(x["fn"]) for x in read_csv(tmp_path / "probe-14-forces.csv")}
+    table = read_csv(tmp_path / "probe-14-forces.csv")
+    forces = {int(x["contact"]): float(x["fn"]) for x in table}
     assert forces[14] == compliant.f_crit and compliant.converged
+    # the contacts the step opens and sets sliding, as the tool's table of states counts them
+    loaded = [x for x in table if int(x["contact"]) != 14 and float(x["fn0"]) > 1e-6 * p.F0]
+    assert compliant.opened == sum(x["state"] == "open" for x in loaded) > 0
+    assert compliant.sliding == sum(x["state"] == "slide" for x in loaded) > 0
+    assert unjam.probe(p, contact=14, method="lp").opened == -1
     static = unjam.probe(p, contact=14, method="cd")
     assert abs(static.f_crit - compliant.f_crit) > 0.1 * compliant.f_crit
     with pytest.raises(unjam.Error, match="must be static, lp or compliant"):

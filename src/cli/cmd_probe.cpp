@@ -95,13 +95,17 @@ void write_single(const fs::path& out, const Packing& p, const ProbeResult& r) {
 
 std::string rows_csv(const CampaignState& state, const std::string& method) {
   CsvWriter w({"contact", "a", "b", "f_cont", "f_crit", "method", "converged", "sweeps",
-               "residual", "violations", "lambda_dt", "f_inertia"});
+               "residual", "violations", "lambda_dt", "f_inertia", "opened", "sliding"});
   for (const ProbeRow& r : state.rows) {
     w.cell(r.contact).cell(r.a).cell(r.b).cell(r.f_cont).cell(r.f_crit).cell(method);
     w.cell(r.converged ? 1 : 0).cell(static_cast<std::int64_t>(r.sweeps)).cell(r.residual);
     w.cell(r.violations).cell(r.lambda_dt);
     if (std::isnan(r.f_inertia)) w.cell(std::string_view());  // lp, no solution, older checkpoint
     else w.cell(r.f_inertia);
+    for (const int n : {r.opened, r.sliding}) {  // lp, nlgs, no solution, older checkpoint: empty
+      if (n < 0) w.cell(std::string_view());
+      else w.cell(n);
+    }
     w.end_row();
   }
   return w.str();
@@ -474,6 +478,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
       std::printf(", over the %d probes that record it", sum.inertia_probes);
     std::printf("\n");
   }
+  if (sum.state_probes > 0)
+    std::printf("  contacts loaded in the packing that the step opens / sets sliding: median %g / %g over %d probes\n",
+                sum.opened_median, sum.sliding_median, sum.state_probes);
   if (sum.has_fit)
     std::printf("  d(r) ~ r^-alpha: alpha = %.3f +- %.3f  (fit over r in [%.2f, %.2f], %d bins, R2 %.3f)\n",
                 sum.fit.alpha, sum.fit.alpha_err, sum.fit.r_lo, sum.fit.r_hi, sum.fit.bins, sum.fit.R2);

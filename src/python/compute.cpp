@@ -254,6 +254,13 @@ void bind_probe_result(py::module_& m) {
       .def_readonly("f_inertia", &ProbeResult::f_inertia,
                     "largest net force on a grain over the step, max m |u| / dt^2 (force units as f_crit; "
                     "NaN for lp): the load its inertia carries (docs/probe.md, \"The inertia of the step\")")
+      .def_readonly("opened", &ProbeResult::opened,
+                    "lemke, cd: contacts loaded in the packing (the probed one aside) that the step opens; -1 "
+                    "for lp, nlgs or a probe without a solution (docs/probe.md, \"Which contacts the step opens "
+                    "and sets sliding\")")
+      .def_readonly("sliding", &ProbeResult::sliding,
+                    "lemke, cd: contacts loaded in the packing (the probed one aside) that the step sets sliding "
+                    "(|u_t| > 1e-6 g); -1 for lp, nlgs or a probe without a solution")
       .def_property_readonly("u", &u_view, "(N, 2) float64 read-only view: peculiar displacement (R_max)")
       .def_property_readonly("rot", [](py::object self) {
         const ProbeResult& r = self.cast<const ProbeResult&>();

@@ -89,6 +89,10 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
                               {"median", sum.f_inertia_median_over_F0},
                               {"max", sum.f_inertia_max_over_F0},
                               {"max_contact", sum.f_inertia_max_contact}};
+  if (sum.state_probes > 0)
+    j["step_states"] = {{"probes", sum.state_probes},
+                        {"opened_median", sum.opened_median},
+                        {"sliding_median", sum.sliding_median}};
   if (sum.has_fit) {
     j["alpha"] = sum.fit.alpha;
     j["alpha_err"] = sum.fit.alpha_err;

@@ -237,6 +237,9 @@ ProbeResult cd_step_result(const CdStepProblem& pb, const Packing& packing,
   }
   r.lambda_dt = qd[pb.system.pressure_row()];
   r.f_inertia = step_inertia_force(packing, r, pb.dt);
+  const StepStateChanges changes = step_state_changes(pb, packing, f);
+  r.opened = changes.opened;
+  r.sliding = changes.sliding;
   return r;
 }
 

@@ -35,7 +35,7 @@ double nullable_from(const nlohmann::json& j, const char* what) {
 
 ProbeRow row_of(const ProbeResult& r) {
   return {r.contact, r.a,        r.b,        r.f_cont,    r.f_crit,
-          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt, r.f_inertia};
+          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt, r.f_inertia, r.opened, r.sliding};
 }
 
 // One worker's probe engine: the LP-based probe keeps its model between probes.
@@ -75,7 +75,7 @@ void add_to_average(const Packing& p, const CampaignSettings& s, const std::vect
 std::string encode(const ProbeResult& r) {
   ByteWriter w;
   w.put(r.contact).put(r.a).put(r.b).put(r.f_cont).put(r.f_crit).put(r.g).put(r.lambda_dt);
-  w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations).put(r.f_inertia);
+  w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations).put(r.f_inertia).put(r.opened).put(r.sliding);
   std::vector<double> u(2 * r.u.size());
   for (std::size_t i = 0; i < r.u.size(); ++i) u[2 * i] = r.u[i].x(), u[2 * i + 1] = r.u[i].y();
   w.put_array(u.data(), u.size());
@@ -98,6 +98,8 @@ ProbeResult decode(const std::string& bytes) {
   r.residual = in.get<double>();
   r.violations = in.get<int>();
   r.f_inertia = in.get<double>();
+  r.opened = in.get<int>();
+  r.sliding = in.get<int>();
   const std::vector<double> u = in.get_array<double>();
   for (std::size_t i = 0; i + 1 < u.size(); i += 2) r.u.emplace_back(u[i], u[i + 1]);
   r.u_rot = in.get_array<double>();
@@ -361,6 +363,17 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
   }
   sum.inertia_probes = static_cast<int>(inertia.size());
   if (!inertia.empty()) sum.f_inertia_median_over_F0 = quantile(std::move(inertia), 0.5);
+  std::vector<double> opened, sliding;
+  for (const ProbeRow& r : state.rows) {
+    if (r.opened < 0 || r.sliding < 0) continue;
+    opened.push_back(r.opened);
+    sliding.push_back(r.sliding);
+  }
+  sum.state_probes = static_cast<int>(opened.size());
+  if (!opened.empty()) {
+    sum.opened_median = quantile(std::move(opened), 0.5);
+    sum.sliding_median = quantile(std::move(sliding), 0.5);
+  }
   try {
     sum.fit = fit_power_law(state.average,
                             window.value_or(default_fit_window(p.cell, 2.0 * p.mean_radius())),
@@ -413,7 +426,7 @@ nlohmann::json to_json(const CampaignState& state) {
   nlohmann::json rows = nlohmann::json::array();
   for (const ProbeRow& r : state.rows)
     rows.push_back({r.contact, r.a, r.b, r.f_cont, r.f_crit, r.converged, r.sweeps, r.residual,
-                    r.violations, r.lambda_dt, nullable(r.f_inertia)});
+                    r.violations, r.lambda_dt, nullable(r.f_inertia), r.opened, r.sliding});
   return {{"rows", rows}, {"average", state.average.to_json()}};
 }
 
@@ -429,15 +442,20 @@ CampaignState parse_campaign_state(const nlohmann::json& j, const Packing& p) {
   state.average = std::move(average);
   const auto contacts = static_cast<int>(p.contacts.size());
   for (const auto& r : j.at("rows")) {
-    // 10 values: a checkpoint written before f_inertia was recorded (its rows keep NaN)
-    if (!r.is_array() || (r.size() != 10 && r.size() != 11)) throw Error("a row is not an array of 11 values");
+    // 10 or 11 values: a checkpoint written before f_inertia, or opened and sliding, were
+    // recorded (its rows keep NaN and -1)
+    if (!r.is_array() || (r.size() != 10 && r.size() != 11 && r.size() != 13))
+      throw Error("a row is not an array of 13 values");
     const ProbeRow row{json_integer<int>(r[0], "row contact"),   json_integer<int>(r[1], "row grain a"),
                        json_integer<int>(r[2], "row grain b"),     r[3].get<double>(),
                        r[4].get<double>(),                        r[5].get<bool>(),
                        json_integer<long long>(r[6], "row sweeps"), r[7].get<double>(),
                        json_integer<int>(r[8], "row violations"), r[9].get<double>(),
-                       r.size() == 11 ? nullable_from(r[10], "row f_inertia")
-                                      : std::numeric_limits<double>::quiet_NaN()};
+                       r.size() >= 11 ? nullable_from(r[10], "row f_inertia")
+                                      : std::numeric_limits<double>::quiet_NaN(),
+                       r.size() == 13 ? json_integer<int>(r[11], "row opened") : -1,
+                       r.size() == 13 ? json_integer<int>(r[12], "row sliding") : -1};
+    if (row.opened < -1 || row.sliding < -1) throw Error("a row's opened or sliding is below -1");
     if (row.contact < 0 || row.contact >= contacts)
       throw Error("contact " + std::to_string(row.contact) + " out of range (the packing has " +
                   std::to_string(contacts) + " contacts)");

@@ -79,6 +79,8 @@ struct ProbeRow {
   double lambda_dt = 0.0;
   double f_inertia = std::numeric_limits<double>::quiet_NaN();  // ProbeResult::f_inertia (NaN: lp, no
                                                                 // solution, or an older checkpoint)
+  int opened = -1, sliding = -1;  // ProbeResult::opened, sliding (-1: lp, nlgs, no solution, or an
+                                  // older checkpoint)
 };
 
 struct CampaignState {
@@ -134,6 +136,10 @@ struct CampaignSummary {
   int inertia_probes = 0;
   double f_inertia_median_over_F0 = 0.0, f_inertia_max_over_F0 = 0.0;
   int f_inertia_max_contact = -1;
+  // ProbeRow::opened and sliding over the probes that have them (lemke, cd): how many, and
+  // their medians.
+  int state_probes = 0;
+  double opened_median = 0.0, sliding_median = 0.0;
   bool has_fit = false;
   PowerLawFit fit;
   std::string fit_error;             // why there is no fit (e.g. cell too small)

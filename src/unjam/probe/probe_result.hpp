@@ -33,6 +33,11 @@ struct ProbeResult {
   // its field grows as dt^2 (docs/probe.md, "The inertia of the step"). NaN for lp (no
   // dynamics) and for a probe without a solution.
   double f_inertia = std::numeric_limits<double>::quiet_NaN();
+  // lemke and cd: of the contacts loaded in the packing (fn > 1e-6 F0, the probed one aside),
+  // those the step opens and those it sets sliding (probe/cd_step, step_state_changes;
+  // docs/probe.md, "Which contacts the step opens and sets sliding"). -1 where not known
+  // (lp, nlgs, a probe without a solution).
+  int opened = -1, sliding = -1;
 };
 
 // The residual of a probe whose solver found no solution (lemke: its path ended on a ray).
