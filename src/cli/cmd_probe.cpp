@@ -122,7 +122,7 @@ ProbeResult probe_exact_with_forces(const Packing& p, const CampaignSettings& s,
   if (sol.f.size() > 0) {
     const CdStepProblem step = build_cd_step(p, contact, s.nlgs);
     write_file_atomic(out / ("probe-" + std::to_string(contact) + "-forces.csv"), step_forces_csv(step, p, sol.f));
-    changes = step_state_changes(step, p, sol.f);
+    changes = step_state_changes(step, p, step_states(step, sol.f));
   }
   return sol.result;
 }
@@ -268,7 +268,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
     std::printf("  of the %d other contacts loaded in the packing the step opens %d and slides %d (|u_t| > %g g), "
                 "and %d of the %d without force close; forces, displacements and states in %s\n",
                 changes->loaded, changes->opened, changes->sliding, kExactStepTolerance, changes->closed,
-                changes->contacts - changes->loaded,
+                changes->unloaded,
                 (out / ("probe-" + std::to_string(r.contact) + "-forces.csv")).c_str());
   print_cd_paths(stats);
   if (!r.converged) throw Error(not_converged_message(r, o.method, cd_failure_hint(stats, s.cd)));

@@ -237,7 +237,7 @@ ProbeResult cd_step_result(const CdStepProblem& pb, const Packing& packing,
   }
   r.lambda_dt = qd[pb.system.pressure_row()];
   r.f_inertia = step_inertia_force(packing, r, pb.dt);
-  const StepStateChanges changes = step_state_changes(pb, packing, f);
+  const StepStateChanges changes = step_state_changes(pb, packing, step_states(pb, f));
   r.opened = changes.opened;
   r.sliding = changes.sliding;
   return r;
@@ -252,8 +252,10 @@ const char* step_state_name(StepState state) {
   return "?";
 }
 
-std::vector<StepState> step_states(const CdStepProblem& pb, const Eigen::VectorXd& f) {
-  const Eigen::VectorXd u = pb.relative_displacement(f);
+namespace {
+
+// step_states of forces f whose displacements u = pb.relative_displacement(f) are at hand.
+std::vector<StepState> states_of(const CdStepProblem& pb, const Eigen::VectorXd& f, const Eigen::VectorXd& u) {
   const double tol = kExactStepTolerance, F0 = pb.system.F0;
   std::vector<StepState> states(pb.num_contacts());
   for (int k = 0; k < pb.num_contacts(); ++k) {
@@ -264,19 +266,25 @@ std::vector<StepState> step_states(const CdStepProblem& pb, const Eigen::VectorX
   return states;
 }
 
-StepStateChanges step_state_changes(const CdStepProblem& pb, const Packing& packing, const Eigen::VectorXd& f) {
-  const std::vector<StepState> states = step_states(pb, f);
+}  // namespace
+
+std::vector<StepState> step_states(const CdStepProblem& pb, const Eigen::VectorXd& f) {
+  return states_of(pb, f, pb.relative_displacement(f));
+}
+
+StepStateChanges step_state_changes(const CdStepProblem& pb, const Packing& packing,
+                                    const std::vector<StepState>& states) {
   const double tol = kExactStepTolerance, F0 = pb.system.F0;
   StepStateChanges c;
   for (int k = 0; k < pb.num_contacts(); ++k) {
     if (k == pb.probed) continue;
-    ++c.contacts;
     if (packing.contacts[pb.system.contacts[k]].fn > tol * F0) {
       ++c.loaded;
       if (states[k] == StepState::open) ++c.opened;
       if (states[k] == StepState::slide) ++c.sliding;
-    } else if (states[k] != StepState::open) {
-      ++c.closed;
+    } else {
+      ++c.unloaded;
+      if (states[k] != StepState::open) ++c.closed;
     }
   }
   return c;
@@ -284,7 +292,7 @@ StepStateChanges step_state_changes(const CdStepProblem& pb, const Packing& pack
 
 std::string step_forces_csv(const CdStepProblem& pb, const Packing& packing, const Eigen::VectorXd& f) {
   const Eigen::VectorXd u = pb.relative_displacement(f);
-  const std::vector<StepState> states = step_states(pb, f);
+  const std::vector<StepState> states = states_of(pb, f, u);
   CsvWriter w({"contact", "a", "b", "fn0", "fn", "ft", "un", "ut", "state"});
   for (int k = 0; k < pb.num_contacts(); ++k) {
     const Contact& c = packing.contacts[pb.system.contacts[k]];

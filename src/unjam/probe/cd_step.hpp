@@ -88,14 +88,15 @@ enum class StepState : std::int8_t { open, stick, slide };
 const char* step_state_name(StepState state);
 std::vector<StepState> step_states(const CdStepProblem& problem, const Eigen::VectorXd& f);
 
-// What a step's solution changes against the static network, over every contact but the
-// probed one: `loaded` contacts carry a force in the packing (fn > tol F0, tol as above); of
-// them `opened` are open in the step, `sliding` slide; `closed` carried none and carry one.
+// What a step's solution (its step_states) changes against the static network, over every
+// contact but the probed one: `loaded` contacts carry a force in the packing (fn > tol F0, tol
+// as above); of them `opened` are open in the step, `sliding` slide; of the `unloaded` others
+// `closed` carry a force in the step.
 struct StepStateChanges {
-  int contacts = 0, loaded = 0, opened = 0, sliding = 0, closed = 0;
+  int loaded = 0, opened = 0, sliding = 0, unloaded = 0, closed = 0;
 };
 StepStateChanges step_state_changes(const CdStepProblem& problem, const Packing& packing,
-                                    const Eigen::VectorXd& f);
+                                    const std::vector<StepState>& states);
 
 // The forces of a probe as a table (every contact of the step, in its order): contact, a, b;
 // fn0, the static network's normal force (the packing's); fn, ft, the step's forces; un, ut,

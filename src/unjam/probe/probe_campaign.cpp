@@ -445,7 +445,7 @@ CampaignState parse_campaign_state(const nlohmann::json& j, const Packing& p) {
     // 10 or 11 values: a checkpoint written before f_inertia, or opened and sliding, were
     // recorded (its rows keep NaN and -1)
     if (!r.is_array() || (r.size() != 10 && r.size() != 11 && r.size() != 13))
-      throw Error("a row is not an array of 13 values");
+      throw Error("a row is not an array of 13 values (or of 10 or 11, from an older unjam)");
     const ProbeRow row{json_integer<int>(r[0], "row contact"),   json_integer<int>(r[1], "row grain a"),
                        json_integer<int>(r[2], "row grain b"),     r[3].get<double>(),
                        r[4].get<double>(),                        r[5].get<bool>(),
