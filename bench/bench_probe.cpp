@@ -8,7 +8,8 @@
 //                         no unilateral violation. Counter model_s: building the LP model.
 //   BM_CdPath/N/start/qs  probe_cd_path (the exact CD step, --method cd) on the same contacts,
 //                         one thread, CPU time, from the static network (start 0) or by the
-//                         compliant continuation (start 1, --cd-start compliant), at
+//                         compliant continuation (start 1, --cd-start compliant) or from
+//                         the interior-point iterate (start 2, --cd-start interior), at
 //                         dt = 1e-3 (qs 0) or the quasi-static default dt (qs 1,
 //                         default_probe_dt: 1e-2 at g = 1e-9): s per
 //                         probe; counters exact (residual <= 1e-6 g),
@@ -94,6 +95,7 @@ void BM_CdPath(benchmark::State& state) {
   omp_set_num_threads(1);
   CdPathSettings ps;
   if (state.range(1) == 1) ps.start = CdPathStart::compliant;
+  if (state.range(1) == 2) ps.start = CdPathStart::interior_point;
   ProbeSettings step;
   if (state.range(2) == 1) step.dt = default_probe_dt(ProbeMethod::kCd, step.g);
   std::vector<CdStepSolution> results;
@@ -103,10 +105,11 @@ void BM_CdPath(benchmark::State& state) {
     for (std::size_t i = 0; i < contacts.size(); ++i)
       results.push_back(probe_cd_path(p, contacts[i], step, ps, &stats[i]));
   }
-  int exact = 0, none = 0, pieces = 0, factorizations = 0;
+  int exact = 0, none = 0, pieces = 0, factorizations = 0, interior = 0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const ProbeResult& r = results[i].result;
     pieces += stats[i].pieces;
+    interior += stats[i].interior_iterations;
     factorizations += stats[i].factorizations;
     if (r.residual == kNoSolution) {
       ++none;
@@ -124,12 +127,14 @@ void BM_CdPath(benchmark::State& state) {
   state.counters["no_solution"] = none;
   state.counters["pieces"] = static_cast<double>(pieces) / kProbes;
   state.counters["factorizations"] = static_cast<double>(factorizations) / kProbes;
+  if (interior > 0) state.counters["interior_iterations"] = static_cast<double>(interior) / kProbes;
   state.counters["s_per_probe"] =
       benchmark::Counter(kProbes, benchmark::Counter::kIsIterationInvariantRate |
                                       benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_CdPath)
     ->ArgNames({"N", "start", "qs"})->Args({500, 0, 0})->Args({500, 1, 0})->Args({500, 1, 1})
+    ->Args({500, 2, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 

@@ -21,6 +21,7 @@
 #include "unjam/probe/cd_step.hpp"
 #include "unjam/probe/nlgs_probe.hpp"
 #include "unjam/probe/probe_campaign.hpp"
+#include "unjam/solver/interior_point.hpp"
 
 namespace unjam {
 namespace {
@@ -702,6 +703,94 @@ TEST(CdWindow, RefusesABadRadiusAndTheLpStart) {
   EXPECT_NO_THROW(validate(c));
   c.nlgs.window = -2.0;
   EXPECT_THROW(validate(c), Error);
+}
+
+TEST(InteriorPoint, ConvergesToTheFrictionlessStepsSolution) {
+  // At mu = 0 the step is a monotone LCP (W = A^T M^-1 A is positive semidefinite), so the
+  // central path reaches t = 0: the interior-point method must stop at its target, not
+  // stall, with the displacements of the exact (Lemke) solution, which are unique
+  // (docs/probe.md, "An interior-point start"). The method's scale is the opening g / dt^2.
+  const Packing& p = fixture("p50-mu0.1");
+  ProbeSettings s = quasi_static_step();
+  ContactModel model = contact_model_of(p, std::nullopt);
+  model.mu = 0.0;
+  s.model = model;
+  for (const int k : {1, 5, 38}) {
+    const CdStepProblem pb = build_cd_step(p, k, s);
+    InteriorPointSettings is;
+    is.velocity_scale = pb.g / (pb.dt * pb.dt);
+    const InteriorPointResult ip = interior_point_step(pb, is);
+    const CdStepSolution lemke = probe_cd_lemke(p, k, s);
+    ASSERT_TRUE(lemke.result.converged) << k;
+    EXPECT_FALSE(ip.stalled) << k;
+    EXPECT_LT(ip.complementarity, is.target) << k;
+    EXPECT_GT(ip.iterations, 5) << k;
+    const Eigen::VectorXd u_ip = pb.relative_displacement(ip.f), u_lemke = pb.relative_displacement(lemke.f);
+    // (measured: 9 iterations, |u_ip - u_lemke| 5.3e-7 g, F_crit within 2e-12: at mu = 0 the
+    // iterate is itself an exact step)
+    EXPECT_LT((u_ip - u_lemke).lpNorm<Eigen::Infinity>(), 1e-6 * pb.g) << k;
+    EXPECT_NEAR(ip.f[2 * pb.probed] / lemke.f[2 * pb.probed], 1.0, 1e-9) << k;
+    EXPECT_LE(cd_step_residual(pb, ip.f).max(), kExactStepTolerance) << k;
+    for (int j = 0; j < pb.num_contacts(); ++j) {
+      EXPECT_GE(ip.f[2 * j], 0.0) << k << " " << j;  // an interior iterate: fn >= 0, ft = 0
+      EXPECT_EQ(ip.f[2 * j + 1], 0.0) << k << " " << j;
+    }
+    // q is the iterate's own: the balance M q = dt^2 (A f - b) holds to round-off.
+    EXPECT_LT((ip.q - pb.generalized_displacement(ip.f)).lpNorm<Eigen::Infinity>(), 1e-9 * pb.g) << k;
+  }
+  InteriorPointSettings bad;
+  EXPECT_THROW(interior_point_step(build_cd_step(p, 1, s), bad), Error);  // no velocity scale
+  bad.velocity_scale = 1.0;
+  bad.max_iterations = 0;
+  EXPECT_THROW(interior_point_step(build_cd_step(p, 1, s), bad), Error);
+}
+
+TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
+  // --cd-start interior: the path from the interior-point iterate, and the compliant
+  // continuation where that path finds no exact solution. Every probe of the two 50-disk
+  // fixtures is exact; at mu = 0.1 the iterate alone carries every probe there (no fallback),
+  // and its mean F_crit is the static start's within 0.5 % (several exact solutions differ
+  // per contact; docs/probe.md, "More than one exact solution"). At mu = 1 the fallback runs
+  // on the probes whose path from the iterate closes (contacts 1, 2, 45 and 55).
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  for (const char* name : {"p50-mu0.1", "p50-mu1"}) {
+    const Packing& p = fixture(name);
+    const ProbeSettings s = quasi_static_step();
+    double sum_interior = 0.0, sum_static = 0.0;
+    int fallbacks = 0;
+    for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k) {
+      if (!(p.contacts[k].fn > 0.0)) continue;
+      CdPathStats st;
+      const CdStepSolution sol = probe_cd_path(p, k, s, interior, &st);
+      const std::string at = std::string(name) + " contact " + std::to_string(k);
+      ASSERT_TRUE(sol.result.converged) << at;
+      EXPECT_LE(cd_step_residual(build_cd_step(p, k, s), sol.f).max(), kExactStepTolerance) << at;
+      EXPECT_GT(st.interior_iterations, 0) << at;
+      ASSERT_FALSE(st.paths.empty()) << at;
+      EXPECT_EQ(st.paths.front().compliance, CdPathSettings{}.interior_compliance) << at;
+      long long pieces = 0;
+      for (const CdPathAttempt& a : st.paths) pieces += a.pieces;
+      EXPECT_EQ(sol.result.sweeps, pieces) << at;
+      // a fallback path starts at the continuation's compliance
+      bool fell_back = false;
+      for (const CdPathAttempt& a : st.paths) fell_back |= a.compliance == CdPathSettings{}.compliant_start;
+      fallbacks += fell_back;
+      sum_interior += sol.result.f_crit;
+      sum_static += probe_cd_path(p, k, s).result.f_crit;
+    }
+    if (std::string(name) == "p50-mu0.1") {
+      EXPECT_EQ(fallbacks, 0);
+      EXPECT_NEAR(sum_interior / sum_static, 1.0, 5e-3);
+    } else {
+      EXPECT_GT(fallbacks, 0);
+    }
+  }
+  CdPathSettings bad = interior;
+  bad.interior_compliance = 0.0;
+  EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
+  EXPECT_EQ(cd_start_from_name("interior"), CdPathStart::interior_point);
+  EXPECT_STREQ(cd_start_name(CdPathStart::interior_point), "interior");
 }
 
 }  // namespace

@@ -601,6 +601,38 @@ TEST_F(CliProbe, CompliantContinuationIsRecordedAndReachesTheStaticStartsSolutio
 }
 
 }  // namespace
+TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount) {
+  // --cd-start interior on a seeded sample of p50-mu0.1: every probe exact, F_crit within 1 %
+  // of the static start's (at mu = 0.1 the exact solutions of one step differ by up to a few
+  // 1e-3 here), the start and its fallback's softer starts recorded in the summary, the same
+  // bytes with 1 and 2 threads, and the single probe lists the interior-point iterations.
+  const std::string args = " --sample 6 --method cd --quiet --out ";
+  const fs::path one = root_ / "interior1", two = root_ / "interior2", rigid = root_ / "static";
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(one) + " --cd-start interior --threads 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(two) + " --cd-start interior --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + args + q(rigid) + " --threads 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_file(one / "probes.csv"), read_file(two / "probes.csv"));
+  const CsvTable a = CsvTable::read(one / "probes.csv"), b = CsvTable::read(rigid / "probes.csv");
+  ASSERT_EQ(a.rows(), 6u);
+  for (std::size_t i = 0; i < a.rows(); ++i) {
+    EXPECT_EQ(a.integer(i, a.column("converged")), 1) << "row " << i;
+    EXPECT_LE(a.number(i, a.column("residual")), 1e-6) << "row " << i;
+    EXPECT_NEAR(a.number(i, a.column("f_crit")) / b.number(i, b.column("f_crit")), 1.0, 1e-2) << "row " << i;
+  }
+  const nlohmann::json j = read_json_file(one / "probe_summary.json");
+  EXPECT_EQ(j["settings"]["cd_start"], "interior");
+  EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
+  const int k = static_cast<int>(a.integer(0, a.column("contact")));
+  r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +
+               q(root_ / "single"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("interior-point start: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 1e-05"), std::string::npos) << r.output;
+}
+
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
   // Contact 73 of the frozen 100-disk structure at mu = 1, quasi-static, one starting
   // compliance: the lowering from 0.1 stops at a fold at 0.012 and no restart is exact. The

@@ -273,7 +273,7 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"probe " + fixture.string() + " --contact 1 --g nan --out " + out.string(), "must be a finite number > 0"},
       {"probe " + fixture.string() + " --contact 1 --dt inf --out " + out.string(), "must be a finite number > 0"},
       {"probe " + fixture.string() + " --sample 3 --seed -1 --out " + out.string(), "a seed is an integer"},
-      {"probe " + fixture.string() + " --contact 1 --method cd --cd-start zero --out " + out.string(), "--cd-start must be static, lp or compliant (got 'zero')"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-start zero --out " + out.string(), "--cd-start must be static, lp, compliant or interior (got 'zero')"},
       {"probe " + fixture.string() + " --contact 1 --cd-start lp --out " + out.string(), "the cd start 'lp' applies to the cd method only (the method is lp)"},
       {"probe " + fixture.string() + " --sample 3 --max-inertia 1e-3 --out " + out.string(), "a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp"},
       {"probe " + fixture.string() + " --sample 3 --method cd --max-inertia -1 --out " + out.string(), "must be a finite number > 0"},

@@ -161,7 +161,9 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
     char turn[32];
     std::snprintf(turn, sizeof turn, "%.3g", stats.lambda_max);
     return std::string("the branch of solutions through the ") +
-           (start == CdPathStart::lp_optimum ? "lp optimum" : "static network") +
+           (start == CdPathStart::lp_optimum       ? "lp optimum"
+            : start == CdPathStart::interior_point ? "interior-point iterate"
+                                                   : "static network") +
            " closes on itself, turning back at " + turn +
            " of the opening: no solution is connected to it (--cd-start compliant takes the rigid limit of "
            "stiff contacts instead)" + why_fails;
@@ -178,6 +180,9 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
 // One line per path the cd probe followed (CdPathStats::paths): where it started, how far it
 // got and how it ended, so that a user sees why a probe is or is not exact.
 void print_cd_paths(const CdPathStats& stats) {
+  if (stats.interior_iterations > 0)
+    std::printf("  interior-point start: %d iterations, natural residual %.2e (F0, g / dt^2)\n",
+                stats.interior_iterations, stats.interior_residual);
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
     std::printf("  path %zu at compliance %.3g: ", i + 1, a.compliance);
@@ -598,7 +603,8 @@ void add_probe_command(CLI::App& app) {
                   "dynamics from rest reach) or lp (the lp probe's optimum; finds another solution "
                   "where the step has several, on small packings: it fails at 500 disks) or compliant (the static network "
                   "at a soft compliance, lowered to the rigid step: the rigid limit of stiff contacts; fast, but at 500 "
-                  "disks another solution than static's; docs/probe.md, \"Where the path starts\")")
+                  "disks another solution than static's) or interior (the iterate of an interior-point method on the step: "
+                  "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\")")
       ->capture_default_str();
   cmd->add_option(
       "--cd-softer-starts", o->softer_starts,

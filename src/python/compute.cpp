@@ -321,7 +321,7 @@ void bind_compute(py::module_& m) {
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
-        "cd_start: where the cd method's path starts, 'static', 'compliant' or 'lp' "
+        "cd_start: where the cd method's path starts, 'static', 'compliant', 'lp' or 'interior' "
         "(`unjam probe --cd-start`; docs/probe.md, \"Where the path starts\"); cd_softer_starts: "
         "the compliant start's softer starts (`unjam probe --cd-softer-starts`); window: lemke, cd: "
         "the step on the grains within this many mean diameters of the probed pair, the others clamped "

@@ -17,6 +17,7 @@
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
+#include "unjam/solver/interior_point.hpp"
 
 namespace unjam {
 
@@ -851,16 +852,30 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, co
 // are one path scaled (probe_cd_path).
 constexpr double kScaledRestartTolerance = 0.01;
 
-CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
-                             const CdPathSettings& ps, CdPathStats* stats_out) {
+namespace {
+
+// probe_cd_path from ps.start alone.
+CdStepSolution probe_from_start(const Packing& packing, int contact, const ProbeSettings& settings,
+                                const CdPathSettings& ps, CdPathStats* stats_out) {
   if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
     throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
-  CdStepGuess lp_guess;
+  CdStepGuess start_guess;  // the lp optimum or the interior-point iterate
   const CdStepGuess* guess = nullptr;
   if (ps.start == CdPathStart::lp_optimum) {
-    lp_guess = lp_optimum_guess(packing, pb, settings);
-    guess = &lp_guess;
+    start_guess = lp_optimum_guess(packing, pb, settings);
+    guess = &start_guess;
+  }
+  InteriorPointResult interior;
+  if (ps.start == CdPathStart::interior_point) {
+    if (!(ps.interior_compliance > 0.0))
+      throw Error("cd path: interior_compliance must be > 0 (got " + std::to_string(ps.interior_compliance) + ")");
+    InteriorPointSettings is;
+    is.velocity_scale = pb.g / (pb.dt * pb.dt);
+    is.max_iterations = ps.interior_max_iterations;
+    interior = interior_point_step(pb, is);
+    start_guess = {interior.f, interior.q};
+    guess = &start_guess;
   }
   // The compliance trades the conditioning of the sticking set's system against its own
   // displacements; where the path at ps.compliance is not exact, it is followed again at ten
@@ -884,7 +899,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
-  const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};
+  const double c0 = ps.start == CdPathStart::interior_point ? ps.interior_compliance : ps.compliance;
+  const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
@@ -928,6 +944,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     }
   }
   best_stats.pieces_all = budget.used;
+  best_stats.interior_iterations = interior.iterations;
+  best_stats.interior_residual = interior.natural_residual;
   best_stats.budget_spent = budget.spent();
   // The budget stopped the probe short of an exact solution: that is why it has none.
   if (best_stats.budget_spent && !exact()) best_stats.failure = "budget";
@@ -944,6 +962,42 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   best.result.sweeps = best_stats.pieces_all;
   if (stats_out) *stats_out = best_stats;
   return best;
+}
+
+}  // namespace
+
+// The interior-point start is followed by the compliant continuation where its paths find no
+// exact solution (with friction the path from the iterate may close on itself; docs/probe.md,
+// "An interior-point start"), within what is left of the budget; the lower residual is kept
+// and every path is listed.
+CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
+                             const CdPathSettings& ps, CdPathStats* stats_out) {
+  CdPathStats first;
+  CdStepSolution sol = probe_from_start(packing, contact, settings, ps, &first);
+  if (ps.start != CdPathStart::interior_point || sol.result.converged || first.budget_spent) {
+    if (stats_out) *stats_out = std::move(first);
+    return sol;
+  }
+  CdPathSettings rest = ps;
+  rest.start = CdPathStart::compliant;
+  if (ps.max_probe_pieces > 0) rest.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - first.pieces_all);
+  CdPathStats second;
+  CdStepSolution alt = probe_from_start(packing, contact, settings, rest, &second);
+  const auto residual = [](const CdStepSolution& s) { return s.f.size() > 0 ? s.residual.max() : kNoSolution; };
+  const bool take_alt = residual(alt) < residual(sol);
+  CdPathStats& kept = take_alt ? second : first;
+  CdPathStats merged = kept;
+  merged.paths = first.paths;
+  merged.paths.insert(merged.paths.end(), second.paths.begin(), second.paths.end());
+  merged.attempts = static_cast<int>(merged.paths.size());
+  merged.pieces_all = first.pieces_all + second.pieces_all;
+  merged.budget_spent = second.budget_spent;
+  merged.interior_iterations = first.interior_iterations;
+  merged.interior_residual = first.interior_residual;
+  CdStepSolution out = take_alt ? std::move(alt) : std::move(sol);
+  out.result.sweeps = merged.pieces_all;
+  if (stats_out) *stats_out = std::move(merged);
+  return out;
 }
 
 }  // namespace unjam

@@ -51,11 +51,18 @@ namespace unjam {
 // quasi-static step, from which the path reaches the solution of the step nearest to it.
 // Or the static network at a soft compliance (compliant_start), then the compliance lowered
 // step by step to the rigid step's: the rigid limit of the step with stiff contacts.
-enum class CdPathStart { static_network, lp_optimum, compliant };
+// Or the iterate of an interior-point method on the step (solver/interior_point), where the
+// path starts at interior_compliance (docs/probe.md, "An interior-point start").
+enum class CdPathStart { static_network, lp_optimum, compliant, interior_point };
 
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
   double guess_margin = 1e-6;  // start from a guess: displacement conditions strict by this (g)
+  // CdPathStart::interior_point: the path's compliance (then 10 x and 0.1 x it where not
+  // exact, as for the other starts at `compliance`), and the interior-point method's settings
+  // (its velocity_scale is the step's g / dt^2).
+  double interior_compliance = 1e-5;
+  int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
@@ -114,6 +121,8 @@ struct CdPathStats {
   double lambda_max = 0.0;    // the largest lambda the first path reached (1: its end)
   double compliance_end = 0.0;  // compliant: the compliance (as `compliance`) where the
                                 // lowering of the returned attempt stopped; 0 if it did not
+  int interior_iterations = 0;  // interior_point: iterations of the interior-point method
+  double interior_residual = 0.0;  // interior_point: its natural residual at the end (F0, g / dt^2)
   int restarts = 0;           // compliant: paths followed after the first (restarts below where a
                               // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the

@@ -173,13 +173,20 @@ ProbeMethod method_from_name(const std::string& name) {
 }
 
 const char* cd_start_name(CdPathStart start) {
-  return start == CdPathStart::lp_optimum ? "lp" : start == CdPathStart::compliant ? "compliant" : "static";
+  switch (start) {
+    case CdPathStart::lp_optimum: return "lp";
+    case CdPathStart::compliant: return "compliant";
+    case CdPathStart::interior_point: return "interior";
+    case CdPathStart::static_network: break;
+  }
+  return "static";
 }
 
 CdPathStart cd_start_from_name(const std::string& name) {
-  for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum, CdPathStart::compliant})
+  for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum, CdPathStart::compliant,
+                        CdPathStart::interior_point})
     if (name == cd_start_name(s)) return s;
-  throw Error("--cd-start must be static, lp or compliant (got '" + name + "')");
+  throw Error("--cd-start must be static, lp, compliant or interior (got '" + name + "')");
 }
 
 CampaignSettings campaign_settings_for(const Packing& p) {
@@ -407,8 +414,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // recorded where it is not the default, so that earlier checkpoints still resume
     if (s.method == ProbeMethod::kCd && s.cd.start != CdPathStart::static_network)
       j["cd_start"] = cd_start_name(s.cd.start);
-    // Recorded where they apply and are on (0 is the continuation's single start).
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant && s.cd.softer_starts > 0)
+    // Recorded where they apply and are on (0 is the continuation's single start; the
+    // interior-point start falls back to the continuation).
+    if (s.method == ProbeMethod::kCd &&
+        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start

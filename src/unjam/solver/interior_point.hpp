@@ -1,0 +1,42 @@
+#pragma once
+// The contact problem of one step (contact/contact_problem.hpp) as a mixed complementarity
+// problem, by a primal-dual interior-point method (docs/probe.md, "An interior-point start").
+//
+// Unknowns: the velocities v = q / dt^2 (free), and per contact the Stewart-Trinkle variables
+// z = (fn, beta+, beta-, sigma) >= 0, ft = beta+ - beta-, with their complements w >= 0:
+//     balance:  M v - A f = -b
+//     w_fn    = U_n = a_n^T v + g_eff / dt^2       (Signorini: fn w_fn = 0)
+//     w_beta+ = sigma + U_t,  w_beta- = sigma - U_t (ft opposes the slip U_t = a_t^T v)
+//     w_sigma = mu fn - beta+ - beta-               (sigma = |U_t| > 0 only on the cone's edge)
+// which is Coulomb's law with non-associated sliding (no dilatancy). At mu = 0 only fn is
+// kept. The method follows the central path z w = t (Mehrotra's predictor-corrector, one
+// sparse factorisation per iteration) towards t = 0. With non-associated friction the
+// problem is not monotone and the central path may end before t = 0; the iterate is then a
+// guess, not a solution, and the exact probe starts its path from it (probe/cd_path,
+// CdPathStart::interior_point).
+#include <Eigen/Core>
+
+#include "unjam/contact/contact_problem.hpp"
+
+namespace unjam {
+
+struct InteriorPointSettings {
+  double velocity_scale = 0.0;  // U of order one (length / t0^2), e.g. g / dt^2; > 0 required
+  int max_iterations = 40;
+  double target = 1e-8;         // stop where the mean of z w (scaled by F0 and velocity_scale) is below
+  int stall_iterations = 8;     // stop where that mean has not halved over this many iterations
+};
+
+struct InteriorPointResult {
+  Eigen::VectorXd f;            // (fn_0, ft_0, fn_1, ...), force units
+  Eigen::VectorXd q;            // generalised displacement over the step, dt^2 v (rows of A)
+  int iterations = 0;
+  double complementarity = 0.0; // mean z w at the end (scaled)
+  double natural_residual = 0.0;  // max |min(z, w)| at the end (scaled: F0, velocity_scale)
+  bool stalled = false;         // stopped by stall_iterations (or a singular system), not the target
+};
+
+// Throws unjam::Error for a velocity_scale that is not positive, or non-positive iteration counts.
+InteriorPointResult interior_point_step(const ContactProblem& problem, const InteriorPointSettings& settings);
+
+}  // namespace unjam
