@@ -111,64 +111,50 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   Eigen::VectorXd v = (A * forces(z) - b).cwiseQuotient(mv);
   Eigen::VectorXd w = complements(v, z).cwiseMax(1.0);
 
-  // The Newton matrix [[diag mv, -A_f], [G, N + diag(w / z)]] with the grains' rows of v
-  // eliminated (their masses are diagonal), as the path's reduced system (probe/cd_path):
-  //     [P + N + diag(w / z), g_p; -a_p^T, mv_p] (dz, dv_p) = (rhs_z + G_G mv_G^-1 r_G, -r_p),
-  // P = G_G mv_G^-1 A_f,G (sparse: contacts that share a grain), g_p and a_p the pressure
-  // dof's column of G and row of A_f. Its pattern is fixed; only the diagonal changes.
+  // The Newton matrix [[diag mv, -A_f], [G, N + diag(w / z)]], condensed to the path's
+  // reduced system (probe/cd_path): the grains' rows of v are eliminated (their masses are
+  // diagonal), which leaves W = A_G^T mv_G^-1 A_G bordered by the pressure dof, and per
+  // contact the rows of beta+, beta- and sigma are eliminated locally (docs/probe.md, "An
+  // interior-point start"). With D = w / z on the four rows of contact k, x = dU_t and
+  // e1 = 1 / D_beta+, e2 = 1 / D_beta-, E = D_sigma + e1 + e2, the tangential rows give
+  //     d sigma = (y_sigma + e1 y_beta+ + e2 y_beta- - mu dfn + (e2 - e1) x) / E,
+  //     dft = a + b x + c dfn,   a = (D_sigma (e1 y+ - e2 y-) + 2 e1 e2 (y+ - y-) + (e2 - e1) y_sigma) / E,
+  //                              b = -(4 e1 e2 + (e1 + e2) D_sigma) / E <= 0,   c = -mu (e2 - e1) / E
+  // (written without the differences of large terms that e1 or e2 ~ 1 / D -> infinity would
+  // cancel),
+  // so the system in (dfn, dft, dv_p) has rows
+  //     normal:     (W df)_n + a_p,n dv_p + D_fn dfn = y_fn
+  //     tangential: dft - b ((W df)_t + a_p,t dv_p) - c dfn = a          (dft = 0 at mu = 0)
+  //     pressure:   mv_p dv_p - a_p . df = -r_p
+  // of fixed pattern; its values are W's scaled per row plus the diagonal terms.
   const int nG = n - 1;  // the pressure dof is A's last row
-  std::vector<Eigen::Triplet<double>> tg, ta;  // G (m x n), A_f (n x m)
-  for (int k = 0; k < nc; ++k) {
-    const int j = p * k;
-    for (Eigen::SparseMatrix<double>::InnerIterator it(A, 2 * k); it; ++it) {
-      tg.emplace_back(j, static_cast<int>(it.row()), it.value());
-      ta.emplace_back(static_cast<int>(it.row()), j, it.value());
-    }
-    if (p == 1) continue;
-    for (Eigen::SparseMatrix<double>::InnerIterator it(A, 2 * k + 1); it; ++it) {
-      const int i = static_cast<int>(it.row());
-      tg.emplace_back(j + 1, i, it.value());
-      tg.emplace_back(j + 2, i, -it.value());
-      ta.emplace_back(i, j + 1, it.value());
-      ta.emplace_back(i, j + 2, -it.value());
-    }
-  }
-  Eigen::SparseMatrix<double> G(m, n), Af(n, m);
-  G.setFromTriplets(tg.begin(), tg.end());
-  Af.setFromTriplets(ta.begin(), ta.end());
-  const Eigen::SparseMatrix<double> G_G = G.leftCols(nG);
+  const Eigen::SparseMatrix<double> A_G = A.topRows(nG);
   const Eigen::VectorXd mv_G = mv.head(nG);
-  const Eigen::SparseMatrix<double> Af_G = Af.topRows(nG);
-  const Eigen::SparseMatrix<double> P = G_G * mv_G.cwiseInverse().asDiagonal() * Af_G;
+  const Eigen::SparseMatrix<double> W = Eigen::SparseMatrix<double>(A_G.transpose()) * mv_G.cwiseInverse().asDiagonal() * A_G;
+  const Eigen::VectorXd a_p = Eigen::VectorXd(A.row(nG).transpose());
+  const int nf = 2 * nc;
   std::vector<Eigen::Triplet<double>> tk;
-  for (int col = 0; col < P.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(P, col); it; ++it)
+  for (int col = 0; col < W.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(W, col); it; ++it)
       tk.emplace_back(static_cast<int>(it.row()), col, it.value());
-  for (int k = 0; k < nc && p == 4; ++k) {
-    const int j = p * k;
-    tk.emplace_back(j + 1, j + 3, 1.0);
-    tk.emplace_back(j + 2, j + 3, 1.0);
-    tk.emplace_back(j + 3, j, mu);
-    tk.emplace_back(j + 3, j + 1, -1.0);
-    tk.emplace_back(j + 3, j + 2, -1.0);
+  for (int r = 0; r < nf; ++r) {
+    tk.emplace_back(r, r, 0.0);
+    if (a_p[r] != 0.0) {
+      tk.emplace_back(r, nf, a_p[r]);
+      tk.emplace_back(nf, r, -a_p[r]);
+    }
   }
-  for (int j = 0; j < m; ++j) tk.emplace_back(j, j, 0.0);  // diag(w / z), set per iteration
-  for (Eigen::SparseMatrix<double>::InnerIterator it(G, nG); it; ++it)
-    tk.emplace_back(static_cast<int>(it.row()), m, it.value());
-  const Eigen::SparseMatrix<double> Af_row = Af.bottomRows(1);
-  for (int col = 0; col < Af_row.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(Af_row, col); it; ++it) tk.emplace_back(m, col, -it.value());
-  tk.emplace_back(m, m, mv[nG]);
-  Eigen::SparseMatrix<double> K0(m + 1, m + 1);
-  K0.setFromTriplets(tk.begin(), tk.end());
-  K0.makeCompressed();
-  std::vector<double*> diag(static_cast<std::size_t>(m));  // K's diagonal entries, and K0's values there
-  Eigen::VectorXd diag0(m);
-  Eigen::SparseMatrix<double> K = K0;
-  for (int j = 0; j < m; ++j) {
-    diag[static_cast<std::size_t>(j)] = &K.coeffRef(j, j);
-    diag0[j] = *diag[static_cast<std::size_t>(j)];
-  }
+  for (int k = 0; k < nc; ++k) tk.emplace_back(2 * k + 1, 2 * k, 0.0);
+  tk.emplace_back(nf, nf, mv[nG]);
+  Eigen::SparseMatrix<double> K(nf + 1, nf + 1);
+  K.setFromTriplets(tk.begin(), tk.end());
+  K.makeCompressed();
+  const Eigen::VectorXd base = Eigen::Map<const Eigen::VectorXd>(K.valuePtr(), K.nonZeros());
+  std::vector<double*> diag(static_cast<std::size_t>(nf)), tn(static_cast<std::size_t>(nc));
+  for (int r = 0; r < nf; ++r) diag[static_cast<std::size_t>(r)] = &K.coeffRef(r, r);
+  for (int k = 0; k < nc; ++k) tn[static_cast<std::size_t>(k)] = &K.coeffRef(2 * k + 1, 2 * k);
+  Eigen::VectorXd row_scale = Eigen::VectorXd::Ones(nf + 1);
+  Eigen::VectorXd ta(nc), tb(nc), tc(nc);  // a, b, c of each contact's tangential row
   NewtonLu lu;
 
   InteriorPointResult r;
@@ -187,7 +173,30 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
       r.stalled = true;
       break;
     }
-    for (int j = 0; j < m; ++j) *diag[static_cast<std::size_t>(j)] = diag0[j] + w[j] / z[j];
+    // The row scales and diagonal terms of this iterate (D = w / z).
+    const Eigen::VectorXd D = w.cwiseQuotient(z);
+    for (int k = 0; k < nc; ++k) {
+      if (p == 1) {
+        tb[k] = tc[k] = 0.0;
+        continue;
+      }
+      const int j = p * k;
+      const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2;
+      tb[k] = -(4.0 * e1 * e2 + (e1 + e2) * D[j + 3]) / E;
+      tc[k] = -mu * (e2 - e1) / E;
+      row_scale[2 * k + 1] = -tb[k];
+    }
+    if (p == 1) row_scale.segment(0, nf)(Eigen::seq(1, nf - 1, 2)).setZero();
+    {
+      double* value = K.valuePtr();
+      const int* inner = K.innerIndexPtr();
+      for (Eigen::Index e = 0; e < K.nonZeros(); ++e) value[e] = row_scale[inner[e]] * base[e];
+      for (int k = 0; k < nc; ++k) {
+        *diag[static_cast<std::size_t>(2 * k)] += D[p * k];
+        *diag[static_cast<std::size_t>(2 * k + 1)] += 1.0;
+        *tn[static_cast<std::size_t>(k)] -= tc[k];
+      }
+    }
     if (!lu.factorize(K)) {
       r.stalled = true;
       break;
@@ -195,16 +204,47 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
     const Eigen::VectorXd rb = balance_residual(v, z);
     const Eigen::VectorXd rw = w - complements(v, z);
     const Eigen::VectorXd rG = rb.head(nG).cwiseQuotient(mv_G);
+    const Eigen::VectorXd ArG = A_G.transpose() * rG;  // G_G rG in the (fn, ft) rows
     // Solves for (dv, dz) with complementarity right-hand side rc; dw follows.
     const auto newton = [&](const Eigen::VectorXd& rc, Eigen::VectorXd& dv, Eigen::VectorXd& dz, Eigen::VectorXd& dw) {
-      Eigen::VectorXd rhs(m + 1);
-      rhs.head(m) = rc.cwiseQuotient(z) + rw + G_G * rG;
-      rhs[m] = -rb[nG];
+      Eigen::VectorXd y = rc.cwiseQuotient(z) + rw;  // the rows of z, G_G rG added below
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nf + 1);
+      for (int k = 0; k < nc; ++k) {
+        const int j = p * k;
+        y[j] += ArG[2 * k];
+        rhs[2 * k] = y[j];
+        if (p == 1) continue;
+        y[j + 1] += ArG[2 * k + 1];
+        y[j + 2] -= ArG[2 * k + 1];
+        const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2;
+        ta[k] = (D[j + 3] * (e1 * y[j + 1] - e2 * y[j + 2]) + 2.0 * e1 * e2 * (y[j + 1] - y[j + 2]) +
+                 (e2 - e1) * y[j + 3]) / E;
+        rhs[2 * k + 1] = ta[k];
+      }
+      rhs[nf] = -rb[nG];
       const Eigen::VectorXd d = lu.solve(rhs);
-      dz = d.head(m);
+      const Eigen::VectorXd df = d.head(nf);
+      const Eigen::VectorXd dU = W * df + a_p * d[nf];
+      dz.resize(m);
+      for (int k = 0; k < nc; ++k) {
+        const int j = p * k;
+        dz[j] = df[2 * k];
+        if (p == 1) continue;
+        const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2, x = dU[2 * k + 1];
+        const double dsigma = (y[j + 3] + e1 * y[j + 1] + e2 * y[j + 2] - mu * df[2 * k] + (e2 - e1) * x) / E;
+        // the beta with the smaller e from its row, the other from dft = dbeta+ - dbeta-
+        if (e1 >= e2) {
+          dz[j + 2] = e2 * (y[j + 2] + x - dsigma);
+          dz[j + 1] = df[2 * k + 1] + dz[j + 2];
+        } else {
+          dz[j + 1] = e1 * (y[j + 1] - x - dsigma);
+          dz[j + 2] = dz[j + 1] - df[2 * k + 1];
+        }
+        dz[j + 3] = dsigma;
+      }
       dv.resize(n);
-      dv.head(nG) = (Af_G * dz - rb.head(nG)).cwiseQuotient(mv_G);
-      dv[nG] = d[m];
+      dv.head(nG) = (A_G * forces(dz) - rb.head(nG)).cwiseQuotient(mv_G);
+      dv[nG] = d[nf];
       dw = complements(dv, dz) - c - rw;  // G dv + N dz - rw (complements() adds c)
     };
     Eigen::VectorXd dv, dz, dw;
