@@ -205,7 +205,12 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
     assert unjam.probe(p, contact=14, method="lp").opened == -1
     static = unjam.probe(p, contact=14, method="cd")
     assert abs(static.f_crit - compliant.f_crit) > 0.1 * compliant.f_crit
-    with pytest.raises(unjam.Error, match="must be static, lp or compliant"):
+    # the interior-point start, as the tool's (bit for bit) and exact
+    tool("probe", fixture, "--contact", 14, "--method", "cd", "--cd-start", "interior", "--out", tmp_path / "ip")
+    interior = unjam.probe(p, contact=14, method="cd", cd_start="interior")
+    assert interior.converged
+    assert [[float(x["ux"]), float(x["uy"])] for x in read_csv(tmp_path / "ip" / "probe-14.csv")] == interior.u.tolist()
+    with pytest.raises(unjam.Error, match="must be static, lp, compliant or interior"):
         unjam.probe(p, contact=14, method="cd", cd_start="soft")
     with pytest.raises(unjam.Error, match="the cd start 'compliant' applies to the cd method only"):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")

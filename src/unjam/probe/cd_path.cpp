@@ -868,8 +868,11 @@ CdStepSolution probe_from_start(const Packing& packing, int contact, const Probe
   }
   InteriorPointResult interior;
   if (ps.start == CdPathStart::interior_point) {
-    if (!(ps.interior_compliance > 0.0))
-      throw Error("cd path: interior_compliance must be > 0 (got " + std::to_string(ps.interior_compliance) + ")");
+    if (!(ps.interior_compliance > 0.0) || !(ps.interior_rigid > 0.0) || ps.interior_rigid > ps.interior_compliance)
+      throw Error("cd path: interior_compliance and interior_rigid must be > 0, interior_rigid <= interior_compliance (got " +
+                  std::to_string(ps.interior_compliance) + ", " + std::to_string(ps.interior_rigid) + ")");
+    if (ps.interior_path_pieces < 1)
+      throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
     InteriorPointSettings is;
     is.velocity_scale = pb.g / (pb.dt * pb.dt);
     is.max_iterations = ps.interior_max_iterations;
@@ -899,9 +902,14 @@ CdStepSolution probe_from_start(const Packing& packing, int contact, const Probe
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
-  const double c0 = ps.start == CdPathStart::interior_point ? ps.interior_compliance : ps.compliance;
+  const double c0 = ps.start == CdPathStart::interior_point ? ps.interior_rigid : ps.compliance;
   const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
-  const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : 3;
+  // From the interior-point iterate: at interior_compliance, lowered to interior_rigid, and
+  // again at 10 times both, each path at most interior_path_pieces x (number of contacts)
+  // pieces (a path from a guess near the solution is short; one that wanders is cut, and the
+  // compliant continuation follows).
+  const bool from_interior = ps.start == CdPathStart::interior_point;
+  const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? 2 : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
   // path starts").
@@ -916,7 +924,9 @@ CdStepSolution probe_from_start(const Packing& packing, int contact, const Probe
       CdPathStats stats;
       CdPathSettings at = ps;
       if (!soft) at.compliance = compliances[attempt];
-      const double path_compliance = soft ? start : at.compliance;
+      if (from_interior && ps.max_pieces == 0) at.max_pieces = std::max(1, ps.interior_path_pieces * pb.num_contacts());
+      const double path_compliance =
+          soft ? start : from_interior ? ps.interior_compliance * (attempt == 0 ? 1.0 : 10.0) : at.compliance;
       CdStepSolution sol =
           follow(pb, packing, at, guess, path_compliance, at.compliance, stats, budget, settings.cancel);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,

@@ -58,10 +58,14 @@ enum class CdPathStart { static_network, lp_optimum, compliant, interior_point }
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
   double guess_margin = 1e-6;  // start from a guess: displacement conditions strict by this (g)
-  // CdPathStart::interior_point: the path's compliance (then 10 x and 0.1 x it where not
-  // exact, as for the other starts at `compliance`), and the interior-point method's settings
-  // (its velocity_scale is the step's g / dt^2).
-  double interior_compliance = 1e-5;
+  // CdPathStart::interior_point: the path's compliance from the iterate, lowered to
+  // interior_rigid (then both 10 x where not exact), each such path cut after
+  // interior_path_pieces x (number of contacts) pieces unless max_pieces is set, and the
+  // interior-point method's iterations (its velocity_scale is the step's g / dt^2); where
+  // neither path is exact, the compliant continuation follows.
+  double interior_compliance = 1e-3;
+  double interior_rigid = 1e-5;
+  int interior_path_pieces = 1;
   int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000

@@ -168,7 +168,9 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
       break;
     }
     const std::size_t h = history.size();
-    if (h > static_cast<std::size_t>(s.stall_iterations) &&
+    // Stalled: near the end of the path (t below stall_below), t has not halved over
+    // stall_iterations iterations. Early on t may stay put for a while before it falls.
+    if (t < s.stall_below && h > static_cast<std::size_t>(s.stall_iterations) &&
         !(t < 0.5 * history[h - 1 - static_cast<std::size_t>(s.stall_iterations)])) {
       r.stalled = true;
       break;

@@ -24,7 +24,8 @@ struct InteriorPointSettings {
   double velocity_scale = 0.0;  // U of order one (length / t0^2), e.g. g / dt^2; > 0 required
   int max_iterations = 40;
   double target = 1e-8;         // stop where the mean of z w (scaled by F0 and velocity_scale) is below
-  int stall_iterations = 8;     // stop where that mean has not halved over this many iterations
+  int stall_iterations = 8;     // stop where that mean has not halved over this many iterations,
+  double stall_below = 1e-2;    // once it is below this
 };
 
 struct InteriorPointResult {
