@@ -12,60 +12,15 @@
 #include <Eigen/LU>
 #include <Eigen/Sparse>
 
-#include <klu.h>
-
 #include "unjam/contact/equilibrium_matrix.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/solver/interior_point.hpp"
+#include "unjam/solver/klu_factor.hpp"
 
 namespace unjam {
 
 namespace {
-
-// SuiteSparse's KLU on a matrix of fixed pattern: analysed once; factorised afresh with
-// partial pivoting, or, while it stays stable, refactorised with the previous pivot order
-// (several times cheaper). Stable means a reciprocal pivot growth (klu_rgrowth) above
-// kMinGrowth; below it the factorisation is done afresh.
-class Klu {
- public:
-  Klu() { klu_defaults(&common_); }
-  ~Klu() {
-    if (numeric_) klu_free_numeric(&numeric_, &common_);
-    if (symbolic_) klu_free_symbolic(&symbolic_, &common_);
-  }
-  Klu(const Klu&) = delete;
-  Klu& operator=(const Klu&) = delete;
-
-  bool factorize(Eigen::SparseMatrix<double>& S, bool reuse_pivots) {
-    const int n = static_cast<int>(S.rows());
-    if (!symbolic_) symbolic_ = klu_analyze(n, S.outerIndexPtr(), S.innerIndexPtr(), &common_);
-    if (!symbolic_) return false;
-    if (numeric_ && reuse_pivots &&
-        klu_refactor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, numeric_, &common_) &&
-        klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, numeric_, &common_) &&
-        common_.rgrowth > kMinGrowth)
-      return true;
-    if (numeric_) klu_free_numeric(&numeric_, &common_);
-    numeric_ = klu_factor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), symbolic_, &common_);
-    ++fresh_;
-    return numeric_ != nullptr;
-  }
-
-  // B <- S^-1 B, all columns in one pass over the factors.
-  void solve_in_place(Eigen::MatrixXd& B) {
-    klu_solve(symbolic_, numeric_, static_cast<int>(B.rows()), static_cast<int>(B.cols()), B.data(), &common_);
-  }
-
-  int fresh() const { return fresh_; }
-
- private:
-  static constexpr double kMinGrowth = 1e-8;
-  klu_common common_;
-  klu_symbolic* symbolic_ = nullptr;
-  klu_numeric* numeric_ = nullptr;
-  int fresh_ = 0;
-};
 
 enum class State : std::int8_t { kOpen, kStick, kSlidePlus, kSlideMinus, kFrictionless };
 
@@ -571,7 +526,7 @@ class StepPath {
   Eigen::SparseMatrix<double> W_;  // A_G^T M_G^-1 A_G: the Delassus operator of the grains
   Eigen::VectorXd a_p_;            // the pressure row of A
   Eigen::SparseMatrix<double> S_;  // S_b: the matrix last factorised
-  mutable Klu lu_;
+  mutable KluFactor lu_;
   bool reuse_pivots_ = true;
   // The rows changed since S_b (see set_state): their slots, Z = S_b^-1 E, D^T, C's LU.
   static constexpr double kMinCapacitanceRcond = 0.0;  // i.e. only a singular C

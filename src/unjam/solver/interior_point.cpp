@@ -7,9 +7,8 @@
 
 #include <Eigen/Sparse>
 
-#include <klu.h>
-
 #include "unjam/core/error.hpp"
+#include "unjam/solver/klu_factor.hpp"
 
 namespace unjam {
 
@@ -22,42 +21,6 @@ double step_to_boundary(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) {
     if (dx[i] < 0.0) a = std::min(a, -x[i] / dx[i]);
   return a;
 }
-
-// SuiteSparse's KLU on the Newton matrix, whose pattern is fixed: analysed once, factorised
-// at every iteration (its values change on the diagonal of the complementarity rows).
-class NewtonLu {
- public:
-  NewtonLu() { klu_defaults(&common_); }
-  ~NewtonLu() {
-    if (numeric_) klu_free_numeric(&numeric_, &common_);
-    if (symbolic_) klu_free_symbolic(&symbolic_, &common_);
-  }
-  NewtonLu(const NewtonLu&) = delete;
-  NewtonLu& operator=(const NewtonLu&) = delete;
-  bool factorize(Eigen::SparseMatrix<double>& K) {
-    const int n = static_cast<int>(K.rows());
-    if (!symbolic_) symbolic_ = klu_analyze(n, K.outerIndexPtr(), K.innerIndexPtr(), &common_);
-    if (!symbolic_) return false;
-    // The previous pivot order while it stays stable (reciprocal pivot growth above 1e-8, as
-    // the path's factorisations), else afresh with partial pivoting.
-    if (numeric_ && klu_refactor(K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr(), symbolic_, numeric_, &common_) &&
-        klu_rgrowth(K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr(), symbolic_, numeric_, &common_) &&
-        common_.rgrowth > 1e-8)
-      return true;
-    if (numeric_) klu_free_numeric(&numeric_, &common_);
-    numeric_ = klu_factor(K.outerIndexPtr(), K.innerIndexPtr(), K.valuePtr(), symbolic_, &common_);
-    return numeric_ != nullptr && common_.status == KLU_OK;
-  }
-  Eigen::VectorXd solve(Eigen::VectorXd b) {
-    klu_solve(symbolic_, numeric_, static_cast<int>(b.size()), 1, b.data(), &common_);
-    return b;
-  }
-
- private:
-  klu_common common_;
-  klu_symbolic* symbolic_ = nullptr;
-  klu_numeric* numeric_ = nullptr;
-};
 
 }  // namespace
 
@@ -155,7 +118,7 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   for (int k = 0; k < nc; ++k) tn[static_cast<std::size_t>(k)] = &K.coeffRef(2 * k + 1, 2 * k);
   Eigen::VectorXd row_scale = Eigen::VectorXd::Ones(nf + 1);
   Eigen::VectorXd ta(nc), tb(nc), tc(nc);  // a, b, c of each contact's tangential row
-  NewtonLu lu;
+  KluFactor lu;
 
   InteriorPointResult r;
   std::vector<double> history;
@@ -224,7 +187,8 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
         rhs[2 * k + 1] = ta[k];
       }
       rhs[nf] = -rb[nG];
-      const Eigen::VectorXd d = lu.solve(rhs);
+      Eigen::VectorXd d = rhs;
+      lu.solve_in_place(d);
       const Eigen::VectorXd df = d.head(nf);
       const Eigen::VectorXd dU = W * df + a_p * d[nf];
       dz.resize(m);
