@@ -34,7 +34,7 @@ struct InteriorPointResult {
   int iterations = 0;
   double complementarity = 0.0; // mean z w at the end (scaled)
   double natural_residual = 0.0;  // max |min(z, w)| at the end (scaled: F0, velocity_scale)
-  bool stalled = false;         // stopped by stall_iterations (or a singular system), not the target
+  bool stalled = false;         // stopped short of the target: max_iterations, the stall test or a singular system
 };
 
 // Throws unjam::Error for a velocity_scale that is not positive, or non-positive iteration counts.
