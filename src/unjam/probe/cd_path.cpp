@@ -809,12 +809,11 @@ constexpr double kScaledRestartTolerance = 0.01;
 
 namespace {
 
-// probe_cd_path from ps.start alone.
-CdStepSolution probe_from_start(const Packing& packing, int contact, const ProbeSettings& settings,
+// probe_cd_path on its step pb (build_cd_step) from ps.start alone.
+CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings,
                                 const CdPathSettings& ps, CdPathStats* stats_out) {
   if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
     throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
-  const CdStepProblem pb = build_cd_step(packing, contact, settings);
   CdStepGuess start_guess;  // the lp optimum or the interior-point iterate
   const CdStepGuess* guess = nullptr;
   if (ps.start == CdPathStart::lp_optimum) {
@@ -857,13 +856,13 @@ CdStepSolution probe_from_start(const Packing& packing, int contact, const Probe
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
-  const double c0 = ps.start == CdPathStart::interior_point ? ps.interior_rigid : ps.compliance;
-  const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
   // From the interior-point iterate: at interior_compliance, lowered to interior_rigid, and
   // again at 10 times both, each path at most interior_path_pieces x (number of contacts)
   // pieces (a path from a guess near the solution is short; one that wanders is cut, and the
   // compliant continuation follows).
   const bool from_interior = ps.start == CdPathStart::interior_point;
+  const double c0 = from_interior ? ps.interior_rigid : ps.compliance;
+  const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? 2 : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
@@ -937,8 +936,9 @@ CdStepSolution probe_from_start(const Packing& packing, int contact, const Probe
 // and every path is listed.
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
+  const CdStepProblem pb = build_cd_step(packing, contact, settings);
   CdPathStats first;
-  CdStepSolution sol = probe_from_start(packing, contact, settings, ps, &first);
+  CdStepSolution sol = probe_from_start(packing, pb, settings, ps, &first);
   if (ps.start != CdPathStart::interior_point || sol.result.converged || first.budget_spent) {
     if (stats_out) *stats_out = std::move(first);
     return sol;
@@ -947,7 +947,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   rest.start = CdPathStart::compliant;
   if (ps.max_probe_pieces > 0) rest.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - first.pieces_all);
   CdPathStats second;
-  CdStepSolution alt = probe_from_start(packing, contact, settings, rest, &second);
+  CdStepSolution alt = probe_from_start(packing, pb, settings, rest, &second);
   const auto residual = [](const CdStepSolution& s) { return s.f.size() > 0 ? s.residual.max() : kNoSolution; };
   const bool take_alt = residual(alt) < residual(sol);
   CdPathStats& kept = take_alt ? second : first;

@@ -59,11 +59,10 @@ struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
   double guess_margin = 1e-6;  // start from a guess: displacement conditions strict by this (g)
   // CdPathStart::interior_point: the path's compliance from the iterate, lowered to
-  // interior_rigid (then both 10 x where not exact), each of its paths (the first and each
+  // interior_rigid (then both 10 x where not exact); each of its paths (the first and each
   // lowering's) cut after interior_path_pieces x (number of contacts) pieces unless
-  // max_pieces is set, and the
-  // interior-point method's iterations (its velocity_scale is the step's g / dt^2); where
-  // neither path is exact, the compliant continuation follows.
+  // max_pieces is set; the interior-point method's iterations (its velocity_scale is the
+  // step's g / dt^2). Where neither path is exact, the compliant continuation follows.
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
   int interior_path_pieces = 1;

@@ -117,7 +117,8 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   for (int r = 0; r < nf; ++r) diag[static_cast<std::size_t>(r)] = &K.coeffRef(r, r);
   for (int k = 0; k < nc; ++k) tn[static_cast<std::size_t>(k)] = &K.coeffRef(2 * k + 1, 2 * k);
   Eigen::VectorXd row_scale = Eigen::VectorXd::Ones(nf + 1);
-  Eigen::VectorXd ta(nc), tb(nc), tc(nc);  // a, b, c of each contact's tangential row
+  // Per contact: e1, e2, E (above), and c of its tangential row (b is its row scale, -b).
+  Eigen::VectorXd te1(nc), te2(nc), tE(nc), tc(nc);
   KluFactor lu;
 
   InteriorPointResult r;
@@ -141,17 +142,16 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
     // The row scales and diagonal terms of this iterate (D = w / z).
     const Eigen::VectorXd D = w.cwiseQuotient(z);
     for (int k = 0; k < nc; ++k) {
-      if (p == 1) {
-        tb[k] = tc[k] = 0.0;
+      if (p == 1) {  // dft = 0
+        row_scale[2 * k + 1] = tc[k] = 0.0;
         continue;
       }
       const int j = p * k;
       const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2;
-      tb[k] = -(4.0 * e1 * e2 + (e1 + e2) * D[j + 3]) / E;
+      te1[k] = e1, te2[k] = e2, tE[k] = E;
+      row_scale[2 * k + 1] = (4.0 * e1 * e2 + (e1 + e2) * D[j + 3]) / E;  // -b
       tc[k] = -mu * (e2 - e1) / E;
-      row_scale[2 * k + 1] = -tb[k];
     }
-    if (p == 1) row_scale.segment(0, nf)(Eigen::seq(1, nf - 1, 2)).setZero();
     {
       double* value = K.valuePtr();
       const int* inner = K.innerIndexPtr();
@@ -169,25 +169,27 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
     const Eigen::VectorXd rb = balance_residual(v, z);
     const Eigen::VectorXd rw = w - complements(v, z);
     const Eigen::VectorXd rG = rb.head(nG).cwiseQuotient(mv_G);
-    const Eigen::VectorXd ArG = A_G.transpose() * rG;  // G_G rG in the (fn, ft) rows
+    const Eigen::VectorXd ArG = A_G.transpose() * rG;
+    Eigen::VectorXd GrG = Eigen::VectorXd::Zero(m);  // G_G rG in the rows of z
+    for (int k = 0; k < nc; ++k) {
+      GrG[p * k] = ArG[2 * k];
+      if (p == 1) continue;
+      GrG[p * k + 1] = ArG[2 * k + 1];
+      GrG[p * k + 2] = -ArG[2 * k + 1];
+    }
     // Solves for (dv, dz) with complementarity right-hand side rc; dw follows.
     const auto newton = [&](const Eigen::VectorXd& rc, Eigen::VectorXd& dv, Eigen::VectorXd& dz, Eigen::VectorXd& dw) {
-      Eigen::VectorXd y = rc.cwiseQuotient(z) + rw;  // the rows of z, G_G rG added below
-      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nf + 1);
+      const Eigen::VectorXd y = rc.cwiseQuotient(z) + rw + GrG;  // the rows of z
+      Eigen::VectorXd d = Eigen::VectorXd::Zero(nf + 1);  // the right-hand side, then the solution
       for (int k = 0; k < nc; ++k) {
         const int j = p * k;
-        y[j] += ArG[2 * k];
-        rhs[2 * k] = y[j];
+        d[2 * k] = y[j];
         if (p == 1) continue;
-        y[j + 1] += ArG[2 * k + 1];
-        y[j + 2] -= ArG[2 * k + 1];
-        const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2;
-        ta[k] = (D[j + 3] * (e1 * y[j + 1] - e2 * y[j + 2]) + 2.0 * e1 * e2 * (y[j + 1] - y[j + 2]) +
-                 (e2 - e1) * y[j + 3]) / E;
-        rhs[2 * k + 1] = ta[k];
+        const double e1 = te1[k], e2 = te2[k];
+        d[2 * k + 1] = (D[j + 3] * (e1 * y[j + 1] - e2 * y[j + 2]) + 2.0 * e1 * e2 * (y[j + 1] - y[j + 2]) +
+                        (e2 - e1) * y[j + 3]) / tE[k];  // a
       }
-      rhs[nf] = -rb[nG];
-      Eigen::VectorXd d = rhs;
+      d[nf] = -rb[nG];
       lu.solve_in_place(d);
       const Eigen::VectorXd df = d.head(nf);
       const Eigen::VectorXd dU = W * df + a_p * d[nf];
@@ -196,7 +198,7 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
         const int j = p * k;
         dz[j] = df[2 * k];
         if (p == 1) continue;
-        const double e1 = 1.0 / D[j + 1], e2 = 1.0 / D[j + 2], E = D[j + 3] + e1 + e2, x = dU[2 * k + 1];
+        const double e1 = te1[k], e2 = te2[k], E = tE[k], x = dU[2 * k + 1];
         const double dsigma = (y[j + 3] + e1 * y[j + 1] + e2 * y[j + 2] - mu * df[2 * k] + (e2 - e1) * x) / E;
         // the beta with the smaller e from its row, the other from dft = dbeta+ - dbeta-
         if (e1 >= e2) {
