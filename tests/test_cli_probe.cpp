@@ -630,7 +630,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
                q(root_ / "single"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("interior-point start: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("path 1 at compliance 0.001"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 1 from the interior point's states at compliance 0.001"), std::string::npos) << r.output;
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

@@ -185,7 +185,8 @@ void print_cd_paths(const CdPathStats& stats) {
                 stats.interior_iterations, stats.interior_residual);
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
-    std::printf("  path %zu at compliance %.3g: ", i + 1, a.compliance);
+    std::printf("  path %zu %sat compliance %.3g: ", i + 1, a.iterate_states ? "from the interior point's states " : "",
+                a.compliance);
     if (a.lambda_max < 1.0)
       std::printf("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.c_str());
     else if (a.compliance_end > 0.0)

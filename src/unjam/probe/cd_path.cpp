@@ -625,23 +625,27 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
   }
 }
 
-// The states of a guess's forces, and the forces made to obey them strictly: a touching
-// pair (or the probed one) with fn above 1e-7 F0 (the lp probe's state tolerance) is closed,
-// else open with f = 0; a closed pair within 1e-7 F0 of the cone's edge slides against its
-// force (ft = -s mu fn), else it sticks. The path then starts at the guess
-// (StepPath::start_at).
+// The states of a guess, and its forces made to obey them strictly: a touching pair (or the
+// probed one) is closed where the guess says so (CdStepGuess::closed), else where fn is above
+// 1e-7 F0 (the lp probe's state tolerance), otherwise open with f = 0; a closed pair slides
+// against its force (ft = -s mu fn) where the guess says so (CdStepGuess::sliding), else where
+// it is within 1e-7 F0 of the cone's edge, otherwise it sticks. The path then starts at the
+// guess (StepPath::start_at).
 void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess& guess, double margin) {
   const int nc = pb.num_contacts();
   const double mu = pb.system.mu, F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   std::vector<State> states(nc, State::kOpen);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * nc);
+  const bool read = !guess.closed.empty();  // the guess's own states (CdStepGuess)
   for (int k = 0; k < nc; ++k) {
     const double fn = guess.f[2 * k], ft = guess.f[2 * k + 1];
-    if (!(k == pb.probed || (fn > 1e-7 * F0 && pb.g_eff[k] <= 0.0))) continue;
+    const std::size_t ks = static_cast<std::size_t>(k);
+    const bool touching = read ? guess.closed[ks] : fn > 1e-7 * F0;
+    if (!(k == pb.probed || (touching && pb.g_eff[k] <= 0.0))) continue;
     f[2 * k] = std::max(fn, 1e-9 * F0);
     if (mu == 0.0) {
       states[k] = State::kFrictionless;
-    } else if (mu * f[2 * k] - std::abs(ft) <= 1e-7 * F0) {
+    } else if (read ? guess.sliding[ks] : mu * f[2 * k] - std::abs(ft) <= 1e-7 * F0) {
       states[k] = ft > 0.0 ? State::kSlideMinus : State::kSlidePlus;
       f[2 * k + 1] = -slip_sign(states[k]) * mu * f[2 * k];
     } else {
@@ -827,11 +831,13 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
                   std::to_string(ps.interior_compliance) + ", " + std::to_string(ps.interior_rigid) + ")");
     if (ps.interior_path_pieces < 1)
       throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
+    if (!(ps.interior_states_pieces >= 0.0) || !std::isfinite(ps.interior_states_pieces))
+      throw Error("cd path: interior_states_pieces must be >= 0 (got " + std::to_string(ps.interior_states_pieces) + ")");
     InteriorPointSettings is;
     is.velocity_scale = pb.g / (pb.dt * pb.dt);
     is.max_iterations = ps.interior_max_iterations;
     interior = interior_point_step(pb, is);
-    start_guess = {interior.f, interior.q};
+    start_guess = {interior.f, interior.q, interior.closed, interior.sliding};
     guess = &start_guess;
   }
   // The compliance trades the conditioning of the sticking set's system against its own
@@ -856,14 +862,20 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
-  // From the interior-point iterate: at interior_compliance, lowered to interior_rigid, and
-  // again at 10 times both, each path at most interior_path_pieces x (number of contacts)
-  // pieces (a path from a guess near the solution is short; one that wanders is cut, and the
-  // compliant continuation follows).
+  // From the interior-point iterate (docs/probe.md, "An interior-point start"): first from its
+  // own states (InteriorPointResult::closed, sliding) at interior_compliance, lowered to
+  // interior_rigid, that path cut at interior_states_pieces x (number of contacts) pieces;
+  // then from the states of its forces, at interior_compliance and at 10 times both, each
+  // path at most interior_path_pieces x (number of contacts) pieces (a path from a guess near
+  // the solution is short; one that wanders is cut, and the compliant continuation follows).
   const bool from_interior = ps.start == CdPathStart::interior_point;
   const double c0 = from_interior ? ps.interior_rigid : ps.compliance;
   const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
-  const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? 2 : 3;
+  const bool states_first = from_interior && ps.interior_states_pieces > 0.0;
+  CdStepGuess forces_guess;  // the iterate's forces, their states read by tolerances
+  if (from_interior) forces_guess = {start_guess.f, start_guess.q, {}, {}};
+  const int first_retry = states_first ? 2 : 1;  // the attempts from here on are retries
+  const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? first_retry + 1 : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
   // path starts").
@@ -874,18 +886,33 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     double start = ps.compliant_start * std::pow(ps.softer_factor, from);  // soft: the next path's compliance
     double scaled = 0.0;  // lambda_max / compliance of the last restart that stopped short of lambda = 1
     for (int attempt = 0; attempt < attempts; ++attempt) {
-      if (attempt > 0 && (!ps.retry || (soft && !(start > ps.compliance)) || budget.spent())) break;
+      if (attempt >= first_retry && (!ps.retry || (soft && !(start > ps.compliance)))) break;
+      if (attempt > 0 && budget.spent()) break;
       CdPathStats stats;
       CdPathSettings at = ps;
-      if (!soft) at.compliance = compliances[attempt];
-      if (from_interior && ps.max_pieces == 0) at.max_pieces = std::max(1, ps.interior_path_pieces * pb.num_contacts());
-      const double path_compliance =
-          soft ? start : from_interior ? ps.interior_compliance * (attempt == 0 ? 1.0 : 10.0) : at.compliance;
+      const CdStepGuess* from_guess = guess;
+      double path_compliance = at.compliance;
+      if (from_interior) {
+        const bool iterate_states = states_first && attempt == 0;
+        const double scale = attempt + 1 == attempts && attempts > 1 ? 10.0 : 1.0;  // the last at 10 x
+        at.compliance = ps.interior_rigid * scale;
+        path_compliance = ps.interior_compliance * scale;
+        const int nc = pb.num_contacts();
+        const int cap = iterate_states ? std::max(1, static_cast<int>(std::ceil(ps.interior_states_pieces * nc)))
+                                       : std::max(1, ps.interior_path_pieces * nc);
+        at.max_pieces = ps.max_pieces == 0 ? cap : iterate_states ? std::min(ps.max_pieces, cap) : ps.max_pieces;
+        if (!iterate_states) from_guess = &forces_guess;
+      } else if (soft) {
+        path_compliance = start;
+      } else {
+        at.compliance = compliances[attempt];
+        path_compliance = at.compliance;
+      }
       CdStepSolution sol =
-          follow(pb, packing, at, guess, path_compliance, at.compliance, stats, budget, settings.cancel);
+          follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                       stats.failure});
+                       stats.failure, from_guess != nullptr && !from_guess->closed.empty()});
       // restart_divisor below where this lowering stopped (or this path's start, where it failed),
       // never below the rigid compliance itself: a path there is the static start's.
       if (soft)

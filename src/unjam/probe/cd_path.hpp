@@ -58,13 +58,17 @@ enum class CdPathStart { static_network, lp_optimum, compliant, interior_point }
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
   double guess_margin = 1e-6;  // start from a guess: displacement conditions strict by this (g)
-  // CdPathStart::interior_point: the path's compliance from the iterate, lowered to
-  // interior_rigid (then both 10 x where not exact); each of its paths (the first and each
-  // lowering's) cut after interior_path_pieces x (number of contacts) pieces unless
-  // max_pieces is set; the interior-point method's iterations (its velocity_scale is the
-  // step's g / dt^2). Where neither path is exact, the compliant continuation follows.
+  // CdPathStart::interior_point (docs/probe.md, "An interior-point start"): paths from the
+  // iterate at interior_compliance, lowered to interior_rigid. The first starts from the
+  // iterate's own states (InteriorPointResult::closed, sliding) and is cut after
+  // interior_states_pieces x (number of contacts) pieces (0: not followed); the next from the
+  // states of its forces, and the last as that at 10 x both compliances, each cut after
+  // interior_path_pieces x (number of contacts) pieces unless max_pieces is set. Where none
+  // is exact, the compliant continuation follows. interior_max_iterations: the interior-point
+  // method's (its velocity_scale is the step's g / dt^2).
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
+  double interior_states_pieces = 0.1;
   int interior_path_pieces = 1;
   int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
@@ -110,6 +114,7 @@ struct CdPathAttempt {
   int pieces = 0;
   int lowerings = 0;
   std::string failure;          // as CdPathStats::failure ("" where it reached its end)
+  bool iterate_states = false;  // interior: started from the iterate's own states (else from its forces')
 };
 
 struct CdPathStats {
@@ -144,6 +149,9 @@ inline constexpr double kMaxPathResidual = 1e-3;
 // generalised displacement q over the step, in the order of the step's system.
 struct CdStepGuess {
   Eigen::VectorXd f, q;
+  // Optional (empty: read from f by tolerances), per contact: closed, and sliding on the
+  // cone's edge (the interior-point iterate's own reading, InteriorPointResult).
+  std::vector<bool> closed, sliding;
 };
 
 // The LP optimum of the probed contact (F_crit = fn_max) and its kinematic field, as a guess.

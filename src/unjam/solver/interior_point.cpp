@@ -231,6 +231,13 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   }
   r.complementarity = history.back();
   r.natural_residual = z.cwiseMin(w).cwiseAbs().maxCoeff();
+  r.closed.assign(static_cast<std::size_t>(nc), false);
+  r.sliding.assign(static_cast<std::size_t>(nc), false);
+  for (int k = 0; k < nc; ++k) {
+    const int j = p * k;
+    r.closed[static_cast<std::size_t>(k)] = z[j] > w[j];
+    if (p == 4) r.sliding[static_cast<std::size_t>(k)] = z[j + 3] > w[j + 3];
+  }
   r.f = F0 * forces(z);
   r.q = (dt2 * U) * v;
   return r;

@@ -14,6 +14,8 @@
 // problem is not monotone and the central path may end before t = 0; the iterate is then a
 // guess, not a solution, and the exact probe starts its path from it (probe/cd_path,
 // CdPathStart::interior_point).
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "unjam/contact/contact_problem.hpp"
@@ -35,6 +37,11 @@ struct InteriorPointResult {
   double complementarity = 0.0; // mean z w at the end (scaled)
   double natural_residual = 0.0;  // max |min(z, w)| at the end (scaled: F0, velocity_scale)
   bool stalled = false;         // stopped short of the target: max_iterations, the stall test or a singular system
+  // Per contact, which member of each complementary pair is the larger at the end (the
+  // iterate's own reading of the states, where the forces alone are ambiguous): closed where
+  // fn > w_fn (the normal displacement's complement), sliding where sigma > w_sigma =
+  // mu fn - |ft| (the slip rate exceeds the distance to the cone's edge; never at mu = 0).
+  std::vector<bool> closed, sliding;
 };
 
 // Throws unjam::Error for a velocity_scale that is not positive, or non-positive iteration counts.
