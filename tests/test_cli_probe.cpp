@@ -624,6 +624,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   }
   const nlohmann::json j = read_json_file(one / "probe_summary.json");
   EXPECT_EQ(j["settings"]["cd_start"], "interior");
+  EXPECT_EQ(j["settings"]["cd_interior_states_pieces"], 0.1);  // CdPathSettings::interior_states_pieces
   EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
   const int k = static_cast<int>(a.integer(0, a.column("contact")));
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +
@@ -631,6 +632,26 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("interior-point start: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("path 1 from the interior point's states at compliance 0.001"), std::string::npos) << r.output;
+  // Without the path from the iterate's states (the start as it was before it): the first
+  // path is the forces' states', and the campaign records no cd_interior_states_pieces, so a
+  // checkpoint of either kind resumes only with its own (docs/probe.md, "The iterate's own
+  // states").
+  r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+               " --method cd --cd-start interior --cd-interior-states-pieces 0 --out " + q(root_ / "single0"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("from the interior point's states"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 0.001"), std::string::npos) << r.output;
+  const std::string part = " --sample 3 --method cd --cd-start interior --threads 1 --out " + q(root_ / "part");
+  r = run_tool("probe " + q(dir_) + part + " --stop-after 1");
+  ASSERT_NE(r.exit_code, 0) << r.output;  // stopped, its checkpoint kept
+  r = run_tool("probe " + q(dir_) + part + " --cd-interior-states-pieces 0");
+  EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint is the other start's
+  EXPECT_NE(r.output.find("cd_interior_states_pieces"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + part);
+  EXPECT_EQ(r.exit_code, 0) << r.output;  // and resumes with its own
+  r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+               " --method cd --cd-start interior --cd-interior-states-pieces -1 --out " + q(root_ / "bad"));
+  EXPECT_NE(r.exit_code, 0) << r.output;
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

@@ -58,6 +58,7 @@ struct ProbeOptions {
   std::string partial;             // --partial DIR: the outputs of the checkpoint's probes, to DIR
   int softer_starts = CdPathSettings{}.softer_starts;
   long long cd_max_pieces = 0;     // > 0: CdPathSettings::max_probe_pieces
+  double interior_states_pieces = CdPathSettings{}.interior_states_pieces;
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -69,6 +70,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.cd.start = cd_start_from_name(o.cd_start);
   s.cd.softer_starts = o.softer_starts;
   s.cd.max_probe_pieces = o.cd_max_pieces;
+  s.cd.interior_states_pieces = o.interior_states_pieces;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -612,6 +614,12 @@ void add_probe_command(CLI::App& app) {
       "cd, compliant start: where the continuation ends without an exact solution, follow it again from 10x "
       "and then 100x ... its starting compliance, this many times (0: one start; docs/probe.md, \"Where the path "
       "starts\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-interior-states-pieces", o->interior_states_pieces,
+                  "cd, interior start: the first path starts from the interior-point iterate's own states and is cut "
+                  "after this many pieces per contact of the step (0: no such path, only the paths from the states of "
+                  "the iterate's forces, as before 2026-11-27; docs/probe.md, \"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--cd-max-pieces", o->cd_max_pieces,

@@ -419,6 +419,11 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd &&
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
+    // The interior start's first path from the iterate's own states (docs/probe.md, "The
+    // iterate's own states"): recorded where on, so that a checkpoint of the start without
+    // it (an earlier binary) is not resumed with it.
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0)
+      j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
