@@ -40,7 +40,8 @@ struct InteriorPointResult {
   // Per contact, which member of each complementary pair is the larger at the end (the
   // iterate's own reading of the states, where the forces alone are ambiguous): closed where
   // fn > w_fn (the normal displacement's complement), sliding where sigma > w_sigma =
-  // mu fn - |ft| (the slip rate exceeds the distance to the cone's edge; never at mu = 0).
+  // mu fn - beta+ - beta- (the slip rate exceeds the distance to the cone's edge, mu fn - |ft|
+  // where one beta is zero; never at mu = 0).
   std::vector<bool> closed, sliding;
 };
 
