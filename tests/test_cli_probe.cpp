@@ -632,7 +632,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("interior-point start: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("path 1 from the interior point's states at compliance 0.001"), std::string::npos) << r.output;
-  // Without the path from the iterate's states (the start as it was before it): the first
+  // Without the path from the iterate's states (--cd-interior-states-pieces 0): the first
   // path is the forces' states', and the campaign records no cd_interior_states_pieces, so a
   // checkpoint of either kind resumes only with its own (docs/probe.md, "The iterate's own
   // states").

@@ -619,7 +619,7 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--cd-interior-states-pieces", o->interior_states_pieces,
                   "cd, interior start: the first path starts from the interior-point iterate's own states and is cut "
                   "after this many pieces per contact of the step (0: no such path, only the paths from the states of "
-                  "the iterate's forces, as before 2026-11-27; docs/probe.md, \"The iterate's own states\")")
+                  "the iterate's forces; docs/probe.md, \"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--cd-max-pieces", o->cd_max_pieces,

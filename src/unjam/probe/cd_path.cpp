@@ -869,12 +869,12 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   // path at most interior_path_pieces x (number of contacts) pieces (a path from a guess near
   // the solution is short; one that wanders is cut, and the compliant continuation follows).
   const bool from_interior = ps.start == CdPathStart::interior_point;
-  const double c0 = from_interior ? ps.interior_rigid : ps.compliance;
-  const double compliances[] = {c0, 10.0 * c0, 0.1 * c0};
+  const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};  // static, lp
   const bool states_first = from_interior && ps.interior_states_pieces > 0.0;
   CdStepGuess forces_guess;  // the iterate's forces, their states read by tolerances
   if (from_interior) forces_guess = {start_guess.f, start_guess.q, {}, {}};
   const int first_retry = states_first ? 2 : 1;  // the attempts from here on are retries
+  // interior: the path(s) before first_retry, then the retry at 10 x both compliances
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? first_retry + 1 : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
@@ -894,14 +894,15 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       double path_compliance = at.compliance;
       if (from_interior) {
         const bool iterate_states = states_first && attempt == 0;
-        const double scale = attempt + 1 == attempts && attempts > 1 ? 10.0 : 1.0;  // the last at 10 x
+        const double scale = attempt == first_retry ? 10.0 : 1.0;
         at.compliance = ps.interior_rigid * scale;
         path_compliance = ps.interior_compliance * scale;
         const int nc = pb.num_contacts();
         const int cap = iterate_states ? std::max(1, static_cast<int>(std::ceil(ps.interior_states_pieces * nc)))
                                        : std::max(1, ps.interior_path_pieces * nc);
-        at.max_pieces = ps.max_pieces == 0 ? cap : iterate_states ? std::min(ps.max_pieces, cap) : ps.max_pieces;
-        if (!iterate_states) from_guess = &forces_guess;
+        at.max_pieces = ps.max_pieces == 0 ? cap : ps.max_pieces;
+        if (iterate_states) at.max_pieces = std::min(at.max_pieces, cap);  // its cut holds under any max_pieces
+        else from_guess = &forces_guess;
       } else if (soft) {
         path_compliance = start;
       } else {

@@ -421,7 +421,7 @@ nlohmann::json to_json(const CampaignSettings& s) {
       j["cd_softer_starts"] = s.cd.softer_starts;
     // The interior start's first path from the iterate's own states (docs/probe.md, "The
     // iterate's own states"): recorded where on, so that a checkpoint of the start without
-    // it (an earlier binary) is not resumed with it.
+    // it is not resumed with it, nor the other way round.
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0)
       j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
