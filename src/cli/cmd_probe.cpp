@@ -59,6 +59,7 @@ struct ProbeOptions {
   int softer_starts = CdPathSettings{}.softer_starts;
   long long cd_max_pieces = 0;     // > 0: CdPathSettings::max_probe_pieces
   double interior_states_pieces = CdPathSettings{}.interior_states_pieces;
+  int interior_states_stall = CdPathSettings{}.interior_states_stall;
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -71,6 +72,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.cd.softer_starts = o.softer_starts;
   s.cd.max_probe_pieces = o.cd_max_pieces;
   s.cd.interior_states_pieces = o.interior_states_pieces;
+  s.cd.interior_states_stall = o.interior_states_stall;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -620,6 +622,12 @@ void add_probe_command(CLI::App& app) {
                   "cd, interior start: the first path starts from the interior-point iterate's own states and is cut "
                   "after this many pieces per contact of the step (0: no such path, only the paths from the states of "
                   "the iterate's forces; docs/probe.md, \"The iterate's own states\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-interior-states-stall", o->interior_states_stall,
+                  "cd, interior start: cut the path from the iterate's own states where its opening has not passed "
+                  "the largest one it reached for this many pieces (0: no such cut; docs/probe.md, \"The iterate's "
+                  "own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--cd-max-pieces", o->cd_max_pieces,

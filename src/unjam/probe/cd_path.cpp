@@ -563,10 +563,12 @@ struct PieceBudget {
 // Follows the path from a solution at lambda = 0 (the current states, x0 and x1 solved) to
 // lambda = 1 by parametric principal pivoting; false where it fails (stats.failure says why).
 // Every piece is counted in `budget`; the piece past its limit is not taken (failure
-// "budget"). Polls `cancel` (may be empty) before every piece and throws Cancelled once it
-// holds.
+// "budget"). With stall_pieces > 0 the path is cut where lambda has not passed the largest
+// value it reached for that many pieces (failure "stall"; CdPathSettings::interior_states_stall).
+// Polls `cancel` (may be empty) before every piece and throws Cancelled once it holds.
 bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& ps, Eigen::VectorXd& x0,
-                 Eigen::VectorXd& x1, CdPathStats& stats, PieceBudget& budget, const std::function<bool()>& cancel) {
+                 Eigen::VectorXd& x1, CdPathStats& stats, PieceBudget& budget, const std::function<bool()>& cancel,
+                 int stall_pieces = 0) {
   const int max_pieces = ps.max_pieces > 0 ? ps.max_pieces : 50 * pb.num_contacts() + 1000;
   // sigma = -1 where the path turns back in lambda (a fold: the step has several solutions
   // there, as the dynamics from rest would pass them by).
@@ -574,6 +576,7 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
   std::unordered_set<std::size_t> visited;
   const std::size_t start_key = state_key(path.states(), sigma);
   stats.lambda_max = 0.0;
+  int last_growth = 0;  // the piece on which lambda last passed lambda_max
   while (true) {
     if (cancel && cancel()) throw Cancelled();
     const Event e = path.next_event(x0, x1, lambda, sigma);
@@ -600,7 +603,13 @@ bool follow_path(StepPath& path, const CdStepProblem& pb, const CdPathSettings& 
       stats.failure = stats.pieces > max_pieces ? "pieces" : key == start_key ? "loop" : "cycle";
       return false;
     }
-    stats.lambda_max = std::max(stats.lambda_max, e.lambda);
+    if (e.lambda > stats.lambda_max) {
+      stats.lambda_max = e.lambda;
+      last_growth = stats.pieces;
+    } else if (stall_pieces > 0 && stats.pieces - last_growth > stall_pieces) {
+      stats.failure = "stall";
+      return false;
+    }
     if (e.lambda == lambda) ++stats.degenerate;
     lambda = e.lambda;
     const State previous = path.states()[e.contact];
@@ -658,10 +667,11 @@ void start_from_guess(StepPath& path, const CdStepProblem& pb, const CdStepGuess
 
 // The step followed at compliance `compliance` from the static network or from `guess`, then
 // brought to the rigid step at compliance `rigid` (both as fractions of g / (dt^2 F0), see
-// CdPathSettings); f empty where the first path fails. Every path polls `cancel` (follow_path).
+// CdPathSettings); f empty where the first path fails. stall_pieces: the first path's cut where
+// it stops gaining ground (follow_path). Every path polls `cancel` (follow_path).
 CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdPathSettings& ps,
                       const CdStepGuess* guess, double compliance, double rigid, CdPathStats& stats,
-                      PieceBudget& budget, const std::function<bool()>& cancel) {
+                      PieceBudget& budget, const std::function<bool()>& cancel, int stall_pieces = 0) {
   const int nc = pb.num_contacts(), contact = pb.probed;
   const double F0 = pb.system.F0, dt2 = pb.dt * pb.dt;
   // A compliance of CdPathSettings (a fraction of g / (dt^2 F0)) as kappa, and back.
@@ -694,7 +704,7 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   }
   path.solve(x0, x1);
   path.displacements(x0, x1);
-  if (!follow_path(path, pb, ps, x0, x1, stats, budget, cancel)) {
+  if (!follow_path(path, pb, ps, x0, x1, stats, budget, cancel, stall_pieces)) {
     stats.factorizations += path.factorizations();
     return sol;
   }
@@ -833,6 +843,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
     if (!(ps.interior_states_pieces >= 0.0) || !std::isfinite(ps.interior_states_pieces))
       throw Error("cd path: interior_states_pieces must be >= 0 (got " + std::to_string(ps.interior_states_pieces) + ")");
+    if (ps.interior_states_stall < 0)
+      throw Error("cd path: interior_states_stall must be >= 0 (got " + std::to_string(ps.interior_states_stall) + ")");
     InteriorPointSettings is;
     is.velocity_scale = pb.g / (pb.dt * pb.dt);
     is.max_iterations = ps.interior_max_iterations;
@@ -909,8 +921,9 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         at.compliance = compliances[attempt];
         path_compliance = at.compliance;
       }
+      const int stall = from_interior && states_first && attempt == 0 ? ps.interior_states_stall : 0;
       CdStepSolution sol =
-          follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel);
+          follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
                        stats.failure, from_guess != nullptr && !from_guess->closed.empty()});

@@ -65,10 +65,15 @@ struct CdPathSettings {
   // states of its forces, and the last as that at 10 x both compliances, each cut after
   // interior_path_pieces x (number of contacts) pieces unless max_pieces is set. Where none
   // is exact, the compliant continuation follows. interior_max_iterations: the interior-point
-  // method's (its velocity_scale is the step's g / dt^2).
+  // method's (its velocity_scale is the step's g / dt^2). The path from the iterate's own states
+  // is also cut where lambda has not passed the largest value it reached for
+  // interior_states_stall pieces (0: no such cut): where it is exact it gains ground on nearly
+  // every piece, where it fails it turns back early and wanders there (docs/probe.md, "The
+  // iterate's own states").
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
   double interior_states_pieces = 0.1;
+  int interior_states_stall = 20;
   int interior_path_pieces = 1;
   int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
@@ -137,7 +142,8 @@ struct CdPathStats {
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual),
-                              // "budget" (max_probe_pieces spent)
+                              // "budget" (max_probe_pieces spent), "stall" (the path from the
+                              // interior point's states stopped gaining ground)
   std::vector<CdPathAttempt> paths;  // every path followed, in order (paths.size() == attempts)
 };
 

@@ -424,6 +424,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // it is not resumed with it, nor the other way round.
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0)
       j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
+    // Its cut where it stops gaining ground: recorded where that path is followed and the cut on.
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0 &&
+        s.cd.interior_states_stall > 0)
+      j["cd_interior_states_stall"] = s.cd.interior_states_stall;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
