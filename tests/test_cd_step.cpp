@@ -826,11 +826,13 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
   interior.start = CdPathStart::interior_point;
   CdPathSettings forces_only = interior;  // no path from the iterate's own states
   forces_only.interior_states_pieces = 0.0;
+  CdPathSettings no_retry = interior;  // one path from the iterate's own states
+  no_retry.interior_states_retries = 0;
   for (const char* name : {"p50-mu0.1", "p50-mu1"}) {
     const Packing& p = fixture(name);
     const ProbeSettings s = quasi_static_step();
     double sum_interior = 0.0, sum_static = 0.0;
-    int fallbacks = 0, by_states = 0, probes = 0;
+    int fallbacks = 0, by_states = 0, by_states_retry = 0, probes = 0;
     for (int k = 0; k < static_cast<int>(p.contacts.size()); ++k) {
       if (!(p.contacts[k].fn > 0.0)) continue;
       CdPathStats st;
@@ -841,10 +843,26 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
       EXPECT_GT(st.interior_iterations, 0) << at;
       ASSERT_FALSE(st.paths.empty()) << at;
       EXPECT_EQ(st.paths.front().compliance, CdPathSettings{}.interior_compliance) << at;
-      // The first path starts from the iterate's own states; where it is exact it is the only one.
+      // The first paths start from the iterate's own states, at interior_compliance and, where
+      // that is not exact, at 10 times it (interior_states_retries = 1); where one is exact it
+      // is the last path. The paths after them start from the forces' states.
       EXPECT_TRUE(st.paths.front().iterate_states) << at;
-      for (std::size_t i = 1; i < st.paths.size(); ++i) EXPECT_FALSE(st.paths[i].iterate_states) << at;
+      std::size_t from_states = 0;
+      while (from_states < st.paths.size() && st.paths[from_states].iterate_states) ++from_states;
+      EXPECT_LE(from_states, 2u) << at;
+      if (from_states == 2) {
+        EXPECT_EQ(st.paths[1].compliance, 10.0 * CdPathSettings{}.interior_compliance) << at;
+        EXPECT_GT(st.paths[0].residual, kExactStepTolerance) << at;
+      }
+      for (std::size_t i = from_states; i < st.paths.size(); ++i) EXPECT_FALSE(st.paths[i].iterate_states) << at;
+      const bool states_exact = st.paths[from_states - 1].residual <= kExactStepTolerance;
+      if (states_exact) EXPECT_EQ(st.paths.size(), from_states) << at;
       by_states += st.paths.size() == 1;
+      by_states_retry += states_exact && from_states == 2;
+      CdPathStats once;
+      probe_cd_path(p, k, s, no_retry, &once);
+      EXPECT_TRUE(once.paths.front().iterate_states) << at;
+      if (once.paths.size() > 1) EXPECT_FALSE(once.paths[1].iterate_states) << at;
       ++probes;
       CdPathStats fo;
       const CdStepSolution sol_fo = probe_cd_path(p, k, s, forces_only, &fo);
@@ -868,6 +886,7 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
       EXPECT_NEAR(sum_interior / sum_static, 1.0, 5e-3);
     } else {
       EXPECT_GE(by_states, probes / 2);
+      EXPECT_GE(by_states_retry, 1);  // measured: 1 (and 0 at mu = 0.1, where 78 are the first path's)
       EXPECT_GT(fallbacks, 0);
     }
   }
@@ -876,6 +895,9 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
   EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
   bad = interior;
   bad.interior_states_pieces = -1.0;
+  EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
+  bad = interior;
+  bad.interior_states_retries = -1;
   EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
   EXPECT_EQ(cd_start_from_name("interior"), CdPathStart::interior_point);
   EXPECT_STREQ(cd_start_name(CdPathStart::interior_point), "interior");

@@ -626,6 +626,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_EQ(j["settings"]["cd_start"], "interior");
   EXPECT_EQ(j["settings"]["cd_interior_states_pieces"], 0.1);  // CdPathSettings::interior_states_pieces
   EXPECT_EQ(j["settings"]["cd_interior_states_stall"], 20);  // CdPathSettings::interior_states_stall
+  EXPECT_EQ(j["settings"]["cd_interior_states_retries"], 1);  // CdPathSettings::interior_states_retries
   EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
   const int k = static_cast<int>(a.integer(0, a.column("contact")));
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +
@@ -636,7 +637,8 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   // Without the path from the iterate's states (--cd-interior-states-pieces 0): the first
   // path is the forces' states', and the campaign records no cd_interior_states_pieces, so a
   // checkpoint of either kind resumes only with its own (docs/probe.md, "The iterate's own
-  // states"); the same for that path's cut where it stalls (--cd-interior-states-stall).
+  // states"); the same for that path's cut where it stalls (--cd-interior-states-stall) and its
+  // retry (--cd-interior-states-retries).
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
                " --method cd --cd-start interior --cd-interior-states-pieces 0 --out " + q(root_ / "single0"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -651,6 +653,9 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   r = run_tool("probe " + q(dir_) + part + " --cd-interior-states-stall 0");
   EXPECT_NE(r.exit_code, 0) << r.output;  // nor without the cut where that path stalls
   EXPECT_NE(r.output.find("cd_interior_states_stall"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + part + " --cd-interior-states-retries 0");
+  EXPECT_NE(r.exit_code, 0) << r.output;  // nor without that path's retry
+  EXPECT_NE(r.output.find("cd_interior_states_retries"), std::string::npos) << r.output;
   r = run_tool("probe " + q(dir_) + part);
   EXPECT_EQ(r.exit_code, 0) << r.output;  // and resumes with its own
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
@@ -658,6 +663,9 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_NE(r.exit_code, 0) << r.output;
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
                " --method cd --cd-start interior --cd-interior-states-stall -1 --out " + q(root_ / "bad2"));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+               " --method cd --cd-start interior --cd-interior-states-retries -1 --out " + q(root_ / "bad3"));
   EXPECT_NE(r.exit_code, 0) << r.output;
 }
 

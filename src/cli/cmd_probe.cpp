@@ -60,6 +60,7 @@ struct ProbeOptions {
   long long cd_max_pieces = 0;     // > 0: CdPathSettings::max_probe_pieces
   double interior_states_pieces = CdPathSettings{}.interior_states_pieces;
   int interior_states_stall = CdPathSettings{}.interior_states_stall;
+  int interior_states_retries = CdPathSettings{}.interior_states_retries;
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -73,6 +74,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.cd.max_probe_pieces = o.cd_max_pieces;
   s.cd.interior_states_pieces = o.interior_states_pieces;
   s.cd.interior_states_stall = o.interior_states_stall;
+  s.cd.interior_states_retries = o.interior_states_retries;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -627,6 +629,12 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--cd-interior-states-stall", o->interior_states_stall,
                   "cd, interior start: cut the path from the iterate's own states where its opening has not passed "
                   "the largest one it reached for this many pieces (0: no such cut; docs/probe.md, \"The iterate's "
+                  "own states\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-interior-states-retries", o->interior_states_retries,
+                  "cd, interior start: where the path from the iterate's own states is not exact, follow it again at "
+                  "10x its compliance, this many times, each at 10x the last (0: once; docs/probe.md, \"The iterate's "
                   "own states\")")
       ->capture_default_str()
       ->check(non_negative_number());

@@ -843,6 +843,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
     if (!(ps.interior_states_pieces >= 0.0) || !std::isfinite(ps.interior_states_pieces))
       throw Error("cd path: interior_states_pieces must be >= 0 (got " + std::to_string(ps.interior_states_pieces) + ")");
+    if (ps.interior_states_retries < 0)
+      throw Error("cd path: interior_states_retries must be >= 0 (got " + std::to_string(ps.interior_states_retries) + ")");
     if (ps.interior_states_stall < 0)
       throw Error("cd path: interior_states_stall must be >= 0 (got " + std::to_string(ps.interior_states_stall) + ")");
     InteriorPointSettings is;
@@ -876,7 +878,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   CdPathStats best_stats;
   // From the interior-point iterate (docs/probe.md, "An interior-point start"): first from its
   // own states (InteriorPointResult::closed, sliding) at interior_compliance, lowered to
-  // interior_rigid, that path cut at interior_states_pieces x (number of contacts) pieces;
+  // interior_rigid, that path cut at interior_states_pieces x (number of contacts) pieces or
+  // where it stalls, and again at 10 x ... the compliance (interior_states_retries);
   // then from the states of its forces, at interior_compliance and at 10 times both, each
   // path at most interior_path_pieces x (number of contacts) pieces (a path from a guess near
   // the solution is short; one that wanders is cut, and the compliant continuation follows).
@@ -885,8 +888,11 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   const bool states_first = from_interior && ps.interior_states_pieces > 0.0;
   CdStepGuess forces_guess;  // the iterate's forces, their states read by tolerances
   if (from_interior) forces_guess = {start_guess.f, start_guess.q, {}, {}};
-  const int first_retry = states_first ? 2 : 1;  // the attempts from here on are retries
-  // interior: the path(s) before first_retry, then the retry at 10 x both compliances
+  // interior: the paths from the iterate's own states, at interior_compliance and then at 10,
+  // 100, ... times it (interior_states_retries of them), lowered to interior_rigid; then the one
+  // from its forces' states; then the retry of that at 10 x both compliances
+  const int states_attempts = states_first ? 1 + ps.interior_states_retries : 0;
+  const int first_retry = states_attempts + 1;  // the attempts from here on are retries
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? first_retry + 1 : 3;
   // The continuation's starting compliances: compliant_start, then softer ones (softer_factor
   // times the one before) where it ends without an exact solution (docs/probe.md, "Where the
@@ -905,10 +911,10 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       const CdStepGuess* from_guess = guess;
       double path_compliance = at.compliance;
       if (from_interior) {
-        const bool iterate_states = states_first && attempt == 0;
+        const bool iterate_states = attempt < states_attempts;
         const double scale = attempt == first_retry ? 10.0 : 1.0;
         at.compliance = ps.interior_rigid * scale;
-        path_compliance = ps.interior_compliance * scale;
+        path_compliance = ps.interior_compliance * (iterate_states ? std::pow(10.0, attempt) : scale);
         const int nc = pb.num_contacts();
         const int cap = iterate_states ? std::max(1, static_cast<int>(std::ceil(ps.interior_states_pieces * nc)))
                                        : std::max(1, ps.interior_path_pieces * nc);
@@ -921,7 +927,7 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         at.compliance = compliances[attempt];
         path_compliance = at.compliance;
       }
-      const int stall = from_interior && states_first && attempt == 0 ? ps.interior_states_stall : 0;
+      const int stall = from_interior && attempt < states_attempts ? ps.interior_states_stall : 0;
       CdStepSolution sol =
           follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,

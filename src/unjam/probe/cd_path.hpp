@@ -69,11 +69,14 @@ struct CdPathSettings {
   // is also cut where lambda has not passed the largest value it reached for
   // interior_states_stall pieces (0: no such cut): where it is exact it gains ground on nearly
   // every piece, where it fails it turns back early and wanders there (docs/probe.md, "The
-  // iterate's own states").
+  // iterate's own states"). Where that path is not exact it is followed again at 10 times
+  // interior_compliance (still lowered to interior_rigid), interior_states_retries times, each
+  // at 10 times the last, before the paths from the forces' states.
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
   double interior_states_pieces = 0.1;
   int interior_states_stall = 20;
+  int interior_states_retries = 1;
   int interior_path_pieces = 1;
   int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change

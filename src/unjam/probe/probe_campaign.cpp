@@ -428,6 +428,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0 &&
         s.cd.interior_states_stall > 0)
       j["cd_interior_states_stall"] = s.cd.interior_states_stall;
+    // Its retries at softer compliances: recorded the same way.
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0 &&
+        s.cd.interior_states_retries > 0)
+      j["cd_interior_states_retries"] = s.cd.interior_states_retries;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
