@@ -626,7 +626,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_EQ(j["settings"]["cd_start"], "interior");
   EXPECT_EQ(j["settings"]["cd_interior_states_pieces"], 0.1);  // CdPathSettings::interior_states_pieces
   EXPECT_EQ(j["settings"]["cd_interior_states_stall"], 20);  // CdPathSettings::interior_states_stall
-  EXPECT_EQ(j["settings"]["cd_interior_states_retries"], 1);  // CdPathSettings::interior_states_retries
+  EXPECT_EQ(j["settings"]["cd_interior_states_retries"], 2);  // CdPathSettings::interior_states_retries
   EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
   const int k = static_cast<int>(a.integer(0, a.column("contact")));
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +

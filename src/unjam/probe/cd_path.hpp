@@ -76,7 +76,7 @@ struct CdPathSettings {
   double interior_rigid = 1e-5;
   double interior_states_pieces = 0.1;
   int interior_states_stall = 20;
-  int interior_states_retries = 1;
+  int interior_states_retries = 2;
   int interior_path_pieces = 1;
   int interior_max_iterations = 40;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
