@@ -634,8 +634,8 @@ void add_probe_command(CLI::App& app) {
       ->check(non_negative_number());
   cmd->add_option("--cd-interior-states-retries", o->interior_states_retries,
                   "cd, interior start: where the path from the iterate's own states is not exact, follow it again at "
-                  "10x its compliance, this many times, each at 10x the last (0: once; docs/probe.md, \"The iterate's "
-                  "own states\")")
+                  "10x its compliance, this many times, each at 10x the last (0: no retry; docs/probe.md, "
+                  "\"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--cd-max-pieces", o->cd_max_pieces,

@@ -420,18 +420,14 @@ nlohmann::json to_json(const CampaignSettings& s) {
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
     // The interior start's first path from the iterate's own states (docs/probe.md, "The
-    // iterate's own states"): recorded where on, so that a checkpoint of the start without
-    // it is not resumed with it, nor the other way round.
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0)
+    // iterate's own states"), its cut where it stops gaining ground and its retries at softer
+    // compliances: each recorded where on, so that a checkpoint made without it is not resumed
+    // with it, nor the other way round.
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0) {
       j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
-    // Its cut where it stops gaining ground: recorded where that path is followed and the cut on.
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0 &&
-        s.cd.interior_states_stall > 0)
-      j["cd_interior_states_stall"] = s.cd.interior_states_stall;
-    // Its retries at softer compliances: recorded the same way.
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0 &&
-        s.cd.interior_states_retries > 0)
-      j["cd_interior_states_retries"] = s.cd.interior_states_retries;
+      if (s.cd.interior_states_stall > 0) j["cd_interior_states_stall"] = s.cd.interior_states_stall;
+      if (s.cd.interior_states_retries > 0) j["cd_interior_states_retries"] = s.cd.interior_states_retries;
+    }
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
