@@ -859,10 +859,12 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
       if (states_exact) EXPECT_EQ(st.paths.size(), from_states) << at;
       by_states += st.paths.size() == 1;
       by_states_retry += states_exact && from_states >= 2;
-      CdPathStats once;
-      probe_cd_path(p, k, s, no_retry, &once);
-      EXPECT_TRUE(once.paths.front().iterate_states) << at;
-      if (once.paths.size() > 1) EXPECT_FALSE(once.paths[1].iterate_states) << at;
+      if (from_states >= 2) {  // without retries (where the first path is exact, the same probe)
+        CdPathStats once;
+        probe_cd_path(p, k, s, no_retry, &once);
+        EXPECT_TRUE(once.paths.front().iterate_states) << at;
+        if (once.paths.size() > 1) EXPECT_FALSE(once.paths[1].iterate_states) << at;
+      }
       ++probes;
       CdPathStats fo;
       const CdStepSolution sol_fo = probe_cd_path(p, k, s, forces_only, &fo);

@@ -879,18 +879,16 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   // From the interior-point iterate (docs/probe.md, "An interior-point start"): first from its
   // own states (InteriorPointResult::closed, sliding) at interior_compliance, lowered to
   // interior_rigid, that path cut at interior_states_pieces x (number of contacts) pieces or
-  // where it stalls, and again at 10 x ... the compliance (interior_states_retries);
-  // then from the states of its forces, at interior_compliance and at 10 times both, each
-  // path at most interior_path_pieces x (number of contacts) pieces (a path from a guess near
-  // the solution is short; one that wanders is cut, and the compliant continuation follows).
+  // where it stalls, and where it is not exact again at 10, 100, ... times interior_compliance
+  // (interior_states_retries of them); then from the states of its forces, at
+  // interior_compliance, and the retry of that at 10 times both compliances, each path at most
+  // interior_path_pieces x (number of contacts) pieces (a path from a guess near the solution
+  // is short; one that wanders is cut, and the compliant continuation follows).
   const bool from_interior = ps.start == CdPathStart::interior_point;
   const double compliances[] = {ps.compliance, 10.0 * ps.compliance, 0.1 * ps.compliance};  // static, lp
   const bool states_first = from_interior && ps.interior_states_pieces > 0.0;
   CdStepGuess forces_guess;  // the iterate's forces, their states read by tolerances
   if (from_interior) forces_guess = {start_guess.f, start_guess.q, {}, {}};
-  // interior: the paths from the iterate's own states, at interior_compliance and then at 10,
-  // 100, ... times it (interior_states_retries of them), lowered to interior_rigid; then the one
-  // from its forces' states; then the retry of that at 10 x both compliances
   const int states_attempts = states_first ? 1 + ps.interior_states_retries : 0;
   const int first_retry = states_attempts + 1;  // the attempts from here on are retries
   const int attempts = soft ? 1 + std::max(0, ps.max_restarts) : from_interior ? first_retry + 1 : 3;
@@ -910,8 +908,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       CdPathSettings at = ps;
       const CdStepGuess* from_guess = guess;
       double path_compliance = at.compliance;
+      const bool iterate_states = attempt < states_attempts;  // interior: from the iterate's own states
       if (from_interior) {
-        const bool iterate_states = attempt < states_attempts;
         const double scale = attempt == first_retry ? 10.0 : 1.0;
         at.compliance = ps.interior_rigid * scale;
         path_compliance = ps.interior_compliance * (iterate_states ? std::pow(10.0, attempt) : scale);
@@ -927,12 +925,12 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         at.compliance = compliances[attempt];
         path_compliance = at.compliance;
       }
-      const int stall = from_interior && attempt < states_attempts ? ps.interior_states_stall : 0;
+      const int stall = iterate_states ? ps.interior_states_stall : 0;
       CdStepSolution sol =
           follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                       stats.failure, from_guess != nullptr && !from_guess->closed.empty()});
+                       stats.failure, iterate_states});
       // restart_divisor below where this lowering stopped (or this path's start, where it failed),
       // never below the rigid compliance itself: a path there is the static start's.
       if (soft)
