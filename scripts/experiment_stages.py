@@ -23,23 +23,26 @@ PY = sys.executable or "/usr/bin/python3"
 # per packing (a seeded subset; 0 = every force-carrying contact).
 # cd_sample: contacts per packing probed by the exact probe (`--method cd --cd-start
 # cd_start`) and, for the comparison, by lp on the same contacts (0: none), on the packings of
-# N <= cd_max_n: the exact probe by the compliant continuation costs 1-40 s of CPU per probe
-# at 500 disks with friction at its default, quasi-static dt, 130-150 s at 1000 and 500 s or
-# more at 2000 (docs/benchmarks.md, section 10, "Against N, and against the targets";
-# docs/probe.md, "Where the path starts", "What limits it"). cd_start: compliant (exact on
-# 1789 of 1800 probes at 500 disks, "300 probes per packing"), or static (the branch from the
-# static network; without friction the faster, with the same F_crit). cd_max_pieces: the
-# exact probe's budget of pieces per probe (`unjam probe --cd-max-pieces`; 0: none), which
-# bounds its cost at N >= 1000 (docs/probe.md, "A budget of pieces per probe").
+# N <= cd_max_n. cd_start: interior (the path from an interior-point iterate, exact on every
+# probe of the 500-disk samples at mu = 0.01-1; at its default, quasi-static dt it costs 0.6,
+# 3.7, 27, 7 and 2.3 s of CPU per probe at mu = 0.01, 0.1, 0.2, 0.5 and 1 at 500 disks, 2.2 s
+# at 1000 and 11 s at 2000 disks at mu = 0.01, and ~100 s or more at 1000 disks with mu >= 0.1;
+# docs/probe.md, "An interior-point start", "What limits it"; docs/benchmarks.md, section 10),
+# compliant (the rigid limit of stiff contacts followed from the static network: exact on 1789
+# of 1800 probes at 500 disks, "300 probes per packing", 1.2-4.7 times slower than interior
+# except at mu = 0.2), or static (the branch from the static network; without friction the
+# fastest, with the same F_crit). cd_max_pieces: the exact probe's budget of pieces per probe
+# (`unjam probe --cd-max-pieces`; 0: none), which bounds its cost at N >= 1000 (docs/probe.md,
+# "A budget of pieces per probe").
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
-             "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant", "cd_max_pieces": 0},
+             "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", "cd_max_pieces": 0},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
-             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "compliant",
+             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior",
              "cd_max_pieces": 0},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
-              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "compliant",
+              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "interior",
               "cd_max_pieces": 0},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:

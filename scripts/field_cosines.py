@@ -2,7 +2,7 @@
 
 Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
                      (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
-                     [--cd-start static|compliant] [--g G] [--dt DT] [--threads T]
+                     [--cd-start static|compliant|interior] [--g G] [--dt DT] [--threads T]
                      [--chunk C] [--out DIR]
 
 The lp probe (`--method lp`) takes F_crit as the LP maximum and its field from the LP
@@ -85,9 +85,10 @@ def parse(argv):
     sel.add_argument("--from-campaign", metavar="PROBES_CSV",
                      help="the contacts of a campaign's probes.csv, in its order")
     ap.add_argument("--limit", type=int, help="with --from-campaign: the first M contacts only")
-    ap.add_argument("--cd-start", choices=("static", "compliant"), default="compliant",
-                    help="where the exact probe's path starts (default compliant: docs/probe.md, "
-                         "\"Where the path starts\")")
+    ap.add_argument("--cd-start", choices=("static", "compliant", "interior"), default="compliant",
+                    help="where the exact probe's path starts (default compliant; interior: from "
+                         "an interior-point iterate, faster at 500 disks and beyond: docs/probe.md, "
+                         "\"Where the path starts\", \"An interior-point start\")")
     ap.add_argument("--g", type=float, default=1e-9, help="the probe's opening (default 1e-9)")
     ap.add_argument("--dt", type=float, help="the cd step's time step (default: the quasi-static "
                     "sqrt(g / 1e-5), as unjam probe --method cd)")

@@ -1,7 +1,7 @@
 """How many exact solutions has each probe step? The exact probe from several starts, per contact.
 
 Usage:  /usr/bin/python3 scripts/probe_solutions.py PACKING (--all | --sample M [--seed S])
-                     [--starts static compliant lp] [--rel-tol 1e-3] [--out DIR]
+                     [--starts static compliant lp interior] [--rel-tol 1e-3] [--out DIR]
                      [--unjam PATH] [--threads T] [--g G] [--dt DT]
 
 With friction the probe step's complementarity problem is not a P-matrix problem, and one
@@ -20,7 +20,7 @@ DIR/START; an interrupted run resumes there), and writes per contact:
 
 Starts: static (the path from the static network, the default of --method cd), compliant
 (the rigid limit of stiff contacts), lp (from the lp probe's optimum; small packings only:
-it fails at 500 disks). The solutions found are a lower bound of the step's solutions.
+it fails at 500 disks), interior (from an interior-point iterate of the step). The solutions found are a lower bound of the step's solutions.
 Exit codes: 0 done, 1 bad input or a failed unjam run (its message is printed), 3 interrupted
 (run the same command again to resume).
 """
@@ -37,7 +37,7 @@ from experiment_stages import write_table  # noqa: E402
 from stage_runner import read_json, write_json  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-STARTS = ("static", "compliant", "lp")
+STARTS = ("static", "compliant", "lp", "interior")
 
 
 def parse(argv):
