@@ -841,6 +841,7 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
       ASSERT_TRUE(sol.result.converged) << at;
       EXPECT_LE(cd_step_residual(build_cd_step(p, k, s), sol.f).max(), kExactStepTolerance) << at;
       EXPECT_GT(st.interior_iterations, 0) << at;
+      EXPECT_LE(st.interior_iterations, CdPathSettings{}.interior_max_iterations) << at;
       ASSERT_FALSE(st.paths.empty()) << at;
       EXPECT_EQ(st.paths.front().compliance, CdPathSettings{}.interior_compliance) << at;
       // The first paths start from the iterate's own states, at interior_compliance and, each
@@ -903,6 +904,17 @@ TEST(CdPath, TheInteriorPointStartIsExactOnEveryFixtureProbe) {
   bad = interior;
   bad.interior_states_retries = -1;
   EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
+  bad = interior;
+  bad.interior_max_iterations = 0;
+  EXPECT_THROW(probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), bad), Error);
+  // The cap on the interior-point iterations holds, and a probe from an iterate cut short is
+  // still exact (its paths, or the fallback, finish it).
+  CdPathSettings short_ip = interior;
+  short_ip.interior_max_iterations = 3;
+  CdPathStats st3;
+  const CdStepSolution sol3 = probe_cd_path(fixture("p50-mu0.1"), 1, quasi_static_step(), short_ip, &st3);
+  EXPECT_EQ(st3.interior_iterations, 3);
+  EXPECT_LE(sol3.residual.max(), kExactStepTolerance);
   EXPECT_EQ(cd_start_from_name("interior"), CdPathStart::interior_point);
   EXPECT_STREQ(cd_start_name(CdPathStart::interior_point), "interior");
 }

@@ -627,6 +627,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_EQ(j["settings"]["cd_interior_states_pieces"], 0.1);  // CdPathSettings::interior_states_pieces
   EXPECT_EQ(j["settings"]["cd_interior_states_stall"], 20);  // CdPathSettings::interior_states_stall
   EXPECT_EQ(j["settings"]["cd_interior_states_retries"], 2);  // CdPathSettings::interior_states_retries
+  EXPECT_EQ(j["settings"]["cd_interior_iterations"], 100);  // CdPathSettings::interior_max_iterations
   EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
   const int k = static_cast<int>(a.integer(0, a.column("contact")));
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +
@@ -656,6 +657,9 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   r = run_tool("probe " + q(dir_) + part + " --cd-interior-states-retries 0");
   EXPECT_NE(r.exit_code, 0) << r.output;  // nor without that path's retry
   EXPECT_NE(r.output.find("cd_interior_states_retries"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + part + " --cd-interior-iterations 40");
+  EXPECT_NE(r.exit_code, 0) << r.output;  // nor under the interior-point method's former cap
+  EXPECT_NE(r.output.find("cd_interior_iterations"), std::string::npos) << r.output;
   r = run_tool("probe " + q(dir_) + part);
   EXPECT_EQ(r.exit_code, 0) << r.output;  // and resumes with its own
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
@@ -666,6 +670,9 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_NE(r.exit_code, 0) << r.output;
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
                " --method cd --cd-start interior --cd-interior-states-retries -1 --out " + q(root_ / "bad3"));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+               " --method cd --cd-start interior --cd-interior-iterations 0 --out " + q(root_ / "bad4"));
   EXPECT_NE(r.exit_code, 0) << r.output;
 }
 

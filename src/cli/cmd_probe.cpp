@@ -61,6 +61,7 @@ struct ProbeOptions {
   double interior_states_pieces = CdPathSettings{}.interior_states_pieces;
   int interior_states_stall = CdPathSettings{}.interior_states_stall;
   int interior_states_retries = CdPathSettings{}.interior_states_retries;
+  int interior_iterations = CdPathSettings{}.interior_max_iterations;
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -75,6 +76,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.cd.interior_states_pieces = o.interior_states_pieces;
   s.cd.interior_states_stall = o.interior_states_stall;
   s.cd.interior_states_retries = o.interior_states_retries;
+  s.cd.interior_max_iterations = o.interior_iterations;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -638,6 +640,11 @@ void add_probe_command(CLI::App& app) {
                   "\"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
+  cmd->add_option("--cd-interior-iterations", o->interior_iterations,
+                  "cd, interior start: at most this many iterations of the interior-point method (its own tests "
+                  "end it at 40-50 at 500-2000 disks; docs/probe.md, \"The interior-point method's iterations\")")
+      ->capture_default_str()
+      ->check(positive_number());
   cmd->add_option("--cd-max-pieces", o->cd_max_pieces,
                   "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
                   "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "

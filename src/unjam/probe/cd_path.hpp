@@ -65,7 +65,10 @@ struct CdPathSettings {
   // states of its forces, and the last as that at 10 x both compliances, each cut after
   // interior_path_pieces x (number of contacts) pieces unless max_pieces is set. Where none
   // is exact, the compliant continuation follows. interior_max_iterations: the interior-point
-  // method's (its velocity_scale is the step's g / dt^2). The path from the iterate's own states
+  // method's cap (its velocity_scale is the step's g / dt^2); the method's own tests end it at
+  // 40-50 iterations at 500-2000 disks, and a cap of 40 cut it short there at 2000 disks, where
+  // its states then sent the first path astray (docs/probe.md, "The interior-point method's
+  // iterations"). The path from the iterate's own states
   // is also cut where lambda has not passed the largest value it reached for
   // interior_states_stall pieces (0: no such cut): where it is exact it gains ground on nearly
   // every piece, where it fails it turns back early and wanders there (docs/probe.md, "The
@@ -78,7 +81,7 @@ struct CdPathSettings {
   int interior_states_stall = 20;
   int interior_states_retries = 2;
   int interior_path_pieces = 1;
-  int interior_max_iterations = 40;
+  int interior_max_iterations = 100;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)

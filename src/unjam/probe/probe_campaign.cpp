@@ -428,6 +428,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
       if (s.cd.interior_states_stall > 0) j["cd_interior_states_stall"] = s.cd.interior_states_stall;
       if (s.cd.interior_states_retries > 0) j["cd_interior_states_retries"] = s.cd.interior_states_retries;
     }
+    // The interior-point method's cap on its iterations: recorded where it is not 40, the cap
+    // of the checkpoints made before it was a setting, so that those still resume.
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_max_iterations != 40)
+      j["cd_interior_iterations"] = s.cd.interior_max_iterations;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
