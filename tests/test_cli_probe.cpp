@@ -662,6 +662,17 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_NE(r.output.find("cd_interior_iterations"), std::string::npos) << r.output;
   r = run_tool("probe " + q(dir_) + part);
   EXPECT_EQ(r.exit_code, 0) << r.output;  // and resumes with its own
+  // Under the former cap of 40 the key is not recorded, so the checkpoints made before it was a
+  // setting (which have no such key) resume with --cd-interior-iterations 40, and only so.
+  const std::string part40 = " --sample 3 --method cd --cd-start interior --threads 1 --out " + q(root_ / "part40");
+  r = run_tool("probe " + q(dir_) + part40 + " --cd-interior-iterations 40 --stop-after 1");
+  ASSERT_NE(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(read_json_file(root_ / "part40" / "probe_checkpoint.json")["settings"].contains("cd_interior_iterations"));
+  r = run_tool("probe " + q(dir_) + part40);
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cd_interior_iterations"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + part40 + " --cd-interior-iterations 40");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
                " --method cd --cd-start interior --cd-interior-states-pieces -1 --out " + q(root_ / "bad"));
   EXPECT_NE(r.exit_code, 0) << r.output;
