@@ -63,7 +63,7 @@ import subprocess
 import sys
 import time
 
-from experiment_report import write_report
+from experiment_report import START_WORDS, write_report
 from experiment_stages import REPO, SCALES, SKIPPABLE, build
 from stage_runner import Runner, StageError
 
@@ -89,7 +89,7 @@ def parse_args(argv):
                    "probed by the exact probe (--method cd) and by lp on the same contacts, "
                    "side by side in report.md (0 = none; default: 300 at the paper scale, 0 "
                    "otherwise)")
-    p.add_argument("--cd-start", choices=["interior", "compliant", "static"], help="where the "
+    p.add_argument("--cd-start", choices=list(START_WORDS), help="where the "
                    "exact probe's path starts (`unjam probe --cd-start`; default interior: the "
                    "path from an interior-point iterate, exact on every 500-disk probe measured "
                    "and 1.2-4.7 times faster than compliant there; compliant: the rigid limit of "

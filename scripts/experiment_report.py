@@ -84,7 +84,8 @@ def findings(agg, fixed_agg, n_max):
 
 
 # What each start of the exact probe's path is (`unjam probe --cd-start`; docs/probe.md, "Where
-# the path starts", "An interior-point start"), as the report says it.
+# the path starts", "An interior-point start"), as the report says it; its keys are the
+# experiment's --cd-start choices.
 START_WORDS = {
     "interior": "the path from an interior-point iterate of the step, lowered to the rigid step, ",
     "compliant": "the rigid limit of stiff contacts followed from the static network, ",
@@ -104,7 +105,7 @@ def exact_probe_section(path, start):
     mean = lambda g, c: sweep_table.mean_std([sweep_table.number(r[c]) for r in g])  # noqa: E731
     L = ["", "## The exact probe beside lp", "",
          "The paper's probe step solved exactly (`--method cd --cd-start " + start + "`: "
-         + START_WORDS.get(start, "") +
+         + START_WORDS[start] +
          "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
          "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
          "'not exact': residual above 1e-6 g; 'without a solution': above 1e-3 g, left out of "

@@ -20,7 +20,8 @@ DIR/START; an interrupted run resumes there), and writes per contact:
 
 Starts: static (the path from the static network, the default of --method cd), compliant
 (the rigid limit of stiff contacts), lp (from the lp probe's optimum; small packings only:
-it fails at 500 disks), interior (from an interior-point iterate of the step). The solutions found are a lower bound of the step's solutions.
+it fails at 500 disks), interior (from an interior-point iterate of the step). The solutions
+found are a lower bound of the step's solutions.
 Exit codes: 0 done, 1 bad input or a failed unjam run (its message is printed), 3 interrupted
 (run the same command again to resume).
 """

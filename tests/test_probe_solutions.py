@@ -47,8 +47,8 @@ def setUpModule():
     out = R["out"] = os.path.join(tmp, "solutions")
     R["packing"] = packing
     # dt = 1e-3: the time step of the reference solutions (cd-reference.csv)
-    R["args"] = [packing, "--all", "--starts", "static", "compliant", "lp", "interior", "--threads", "1",
-                 "--dt", "1e-3", "--unjam", UNJAM, "--out", out]
+    R["args"] = [packing, "--all", "--starts", "static", "compliant", "lp", "interior",
+                 "--threads", "1", "--dt", "1e-3", "--unjam", UNJAM, "--out", out]
     p = run(*R["args"])
     if p.returncode != 0:
         raise AssertionError(f"probe_solutions.py failed ({p.returncode}):\n{p.stdout}\n{p.stderr}")

@@ -56,12 +56,7 @@ struct ProbeOptions {
   std::string shard;               // "i/K": this job's share of a job array (campaign/distributor.hpp)
   int stop_after = 0;              // > 0: stop (checkpoint saved) after this many new probes
   std::string partial;             // --partial DIR: the outputs of the checkpoint's probes, to DIR
-  int softer_starts = CdPathSettings{}.softer_starts;
-  long long cd_max_pieces = 0;     // > 0: CdPathSettings::max_probe_pieces
-  double interior_states_pieces = CdPathSettings{}.interior_states_pieces;
-  int interior_states_stall = CdPathSettings{}.interior_states_stall;
-  int interior_states_retries = CdPathSettings{}.interior_states_retries;
-  int interior_iterations = CdPathSettings{}.interior_max_iterations;
+  CdPathSettings cd;               // the --cd-* options bind its fields; its start comes from cd_start
 };
 
 // The probe settings follow the packing: its contact tolerance and bath mass.
@@ -70,13 +65,8 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   if (o.displacement != "peculiar" && o.displacement != "total")
     throw Error("--displacement must be peculiar or total");
   s.method = method_from_name(o.method);
+  s.cd = o.cd;
   s.cd.start = cd_start_from_name(o.cd_start);
-  s.cd.softer_starts = o.softer_starts;
-  s.cd.max_probe_pieces = o.cd_max_pieces;
-  s.cd.interior_states_pieces = o.interior_states_pieces;
-  s.cd.interior_states_stall = o.interior_states_stall;
-  s.cd.interior_states_retries = o.interior_states_retries;
-  s.cd.interior_max_iterations = o.interior_iterations;
   s.total_displacement = o.displacement == "total";
   s.sample = o.sample;
   s.seed = o.seed;
@@ -616,36 +606,36 @@ void add_probe_command(CLI::App& app) {
                   "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\")")
       ->capture_default_str();
   cmd->add_option(
-      "--cd-softer-starts", o->softer_starts,
+      "--cd-softer-starts", o->cd.softer_starts,
       "cd, compliant start: where the continuation ends without an exact solution, follow it again from 10x "
       "and then 100x ... its starting compliance, this many times (0: one start; docs/probe.md, \"Where the path "
       "starts\")")
       ->capture_default_str()
       ->check(non_negative_number());
-  cmd->add_option("--cd-interior-states-pieces", o->interior_states_pieces,
+  cmd->add_option("--cd-interior-states-pieces", o->cd.interior_states_pieces,
                   "cd, interior start: the first path starts from the interior-point iterate's own states and is cut "
                   "after this many pieces per contact of the step (0: no such path, only the paths from the states of "
                   "the iterate's forces; docs/probe.md, \"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
-  cmd->add_option("--cd-interior-states-stall", o->interior_states_stall,
+  cmd->add_option("--cd-interior-states-stall", o->cd.interior_states_stall,
                   "cd, interior start: cut the path from the iterate's own states where its opening has not passed "
                   "the largest one it reached for this many pieces (0: no such cut; docs/probe.md, \"The iterate's "
                   "own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
-  cmd->add_option("--cd-interior-states-retries", o->interior_states_retries,
+  cmd->add_option("--cd-interior-states-retries", o->cd.interior_states_retries,
                   "cd, interior start: where the path from the iterate's own states is not exact, follow it again at "
                   "10x its compliance, this many times, each at 10x the last (0: no retry; docs/probe.md, "
                   "\"The iterate's own states\")")
       ->capture_default_str()
       ->check(non_negative_number());
-  cmd->add_option("--cd-interior-iterations", o->interior_iterations,
+  cmd->add_option("--cd-interior-iterations", o->cd.interior_max_iterations,
                   "cd, interior start: at most this many iterations of the interior-point method (its own tests "
                   "end it at 40-50 at 500-2000 disks; docs/probe.md, \"The interior-point method's iterations\")")
       ->capture_default_str()
       ->check(positive_number());
-  cmd->add_option("--cd-max-pieces", o->cd_max_pieces,
+  cmd->add_option("--cd-max-pieces", o->cd.max_probe_pieces,
                   "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
                   "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "
                   "gives the same bytes with any number of threads (docs/probe.md, \"A budget of pieces per probe\"; "

@@ -392,6 +392,10 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
   return sum;
 }
 
+// The interior-point method's cap on its iterations before it was a setting
+// (CdPathSettings::interior_max_iterations): the one cap the settings leave unrecorded.
+constexpr int kUnrecordedInteriorIterations = 40;
+
 nlohmann::json to_json(const CampaignSettings& s) {
   const bool lp = s.method == ProbeMethod::kLp;
   const std::optional<ContactModel>& model = lp ? s.kinematic.model : s.nlgs.model;
@@ -419,19 +423,21 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd &&
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
-    // The interior start's first path from the iterate's own states (docs/probe.md, "The
-    // iterate's own states"), its cut where it stops gaining ground and its retries at softer
-    // compliances: each recorded where on, so that a checkpoint made without it is not resumed
-    // with it, nor the other way round.
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_states_pieces > 0.0) {
-      j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
-      if (s.cd.interior_states_stall > 0) j["cd_interior_states_stall"] = s.cd.interior_states_stall;
-      if (s.cd.interior_states_retries > 0) j["cd_interior_states_retries"] = s.cd.interior_states_retries;
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
+      // The first path from the iterate's own states (docs/probe.md, "The iterate's own
+      // states"), its cut where it stops gaining ground and its retries at softer compliances:
+      // each recorded where on, so that a checkpoint made without it is not resumed with it, nor
+      // the other way round.
+      if (s.cd.interior_states_pieces > 0.0) {
+        j["cd_interior_states_pieces"] = s.cd.interior_states_pieces;
+        if (s.cd.interior_states_stall > 0) j["cd_interior_states_stall"] = s.cd.interior_states_stall;
+        if (s.cd.interior_states_retries > 0) j["cd_interior_states_retries"] = s.cd.interior_states_retries;
+      }
+      // The interior-point method's cap on its iterations: recorded where it is not the cap of
+      // the checkpoints made before it was a setting, so that those still resume.
+      if (s.cd.interior_max_iterations != kUnrecordedInteriorIterations)
+        j["cd_interior_iterations"] = s.cd.interior_max_iterations;
     }
-    // The interior-point method's cap on its iterations: recorded where it is not 40, the cap
-    // of the checkpoints made before it was a setting, so that those still resume.
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point && s.cd.interior_max_iterations != 40)
-      j["cd_interior_iterations"] = s.cd.interior_max_iterations;
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
