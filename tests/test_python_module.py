@@ -150,7 +150,11 @@ def signature_defaults(function):
                           "max-steps": "max_steps"}),
     ("probe", unjam.probe, {"method": "method", "g": "g", "velocity-tol": "velocity_tol",
                             "max-sweeps": "max_sweeps", "cd-start": "cd_start",
-                            "cd-softer-starts": "cd_softer_starts", "cd-max-pieces": "cd_max_pieces"}),
+                            "cd-softer-starts": "cd_softer_starts", "cd-max-pieces": "cd_max_pieces",
+                            "cd-interior-states-pieces": "cd_interior_states_pieces",
+                            "cd-interior-states-stall": "cd_interior_states_stall",
+                            "cd-interior-states-retries": "cd_interior_states_retries",
+                            "cd-interior-iterations": "cd_interior_iterations"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -228,6 +232,36 @@ def test_a_budget_of_pieces_stops_the_exact_probe_as_the_tool_does(p50, tmp_path
     assert not cut.converged and cut.sweeps == 71
     with pytest.raises(unjam.Error, match="--cd-max-pieces must be >= 0"):
         unjam.probe(p50, contact=38, method="cd", cd_max_pieces=-1)
+
+
+def test_the_interior_start_takes_its_settings_as_the_tool(p50, tmp_path):
+    # cd_interior_* as `unjam probe --cd-interior-*` (docs/probe.md, "The iterate's own
+    # states", "The interior-point method's iterations"): on the sample of seed 4 (contacts 32,
+    # 72, 77) each gives the tool's F_crit and pieces, bit for bit, and changes the pieces of
+    # contact 32 (68 by default; 284, 38, 48 and 47 pieces with the values below); a value out
+    # of range is refused.
+    default = unjam.probe(p50, contact=32, method="cd", cd_start="interior")
+    assert default.converged and default.sweeps == 68
+    for option, argument, value in [("--cd-interior-iterations", "cd_interior_iterations", 3),
+                                    ("--cd-interior-states-pieces", "cd_interior_states_pieces", 0),
+                                    ("--cd-interior-states-retries", "cd_interior_states_retries", 0),
+                                    ("--cd-interior-states-stall", "cd_interior_states_stall", 1)]:
+        out = tmp_path / argument
+        tool("probe", FIXTURE, "--sample", 3, "--seed", 4, "--method", "cd", "--cd-start", "interior", option, value,
+             "--threads", 1, "--out", out, "--quiet")
+        rows = read_csv(out / "probes.csv")
+        results = unjam.probe(p50, contacts=[int(x["contact"]) for x in rows], method="cd", cd_start="interior",
+                              **{argument: value})
+        assert [(float(x["f_crit"]), int(x["sweeps"])) for x in rows] == [(r.f_crit, r.sweeps) for r in results]
+        assert all(r.converged for r in results), argument
+        assert results[0].contact == 32 and results[0].sweeps != default.sweeps, argument
+    for argument, value, message in [("cd_interior_iterations", 0, "--cd-interior-iterations must be >= 1"),
+                                     ("cd_interior_states_pieces", -0.5, "--cd-interior-states-pieces must be >= 0"),
+                                     ("cd_interior_states_pieces", float("nan"), "must be >= 0 and finite"),
+                                     ("cd_interior_states_stall", -1, "--cd-interior-states-stall must be >= 0"),
+                                     ("cd_interior_states_retries", -1, "--cd-interior-states-retries must be >= 0")]:
+        with pytest.raises(unjam.Error, match=message):
+            unjam.probe(p50, contact=32, method="cd", cd_start="interior", **{argument: value})
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -124,14 +124,24 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
   return run_compaction(std::move(p), a);
 }
 
+// The interior start's settings (`unjam probe --cd-interior-*`; CdPathSettings::interior_*).
+struct InteriorArgs {
+  double states_pieces;
+  int states_stall, states_retries, iterations;
+};
+
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
                                 std::optional<double> dt, double velocity_tol, long long max_sweeps,
                                 const std::string& cd_start, int cd_softer_starts, std::optional<double> window,
-                                long long cd_max_pieces) {
+                                long long cd_max_pieces, const InteriorArgs& interior) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.cd.start = cd_start_from_name(cd_start);
   s.cd.softer_starts = cd_softer_starts;
+  s.cd.interior_states_pieces = interior.states_pieces;
+  s.cd.interior_states_stall = interior.states_stall;
+  s.cd.interior_states_retries = interior.states_retries;
+  s.cd.interior_max_iterations = interior.iterations;
   s.cd.max_probe_pieces = cd_max_pieces;
   s.nlgs.g = s.kinematic.g = g;
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
@@ -151,11 +161,15 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, std::optional<double> dt, double velocity_tol,
                  long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
-                 std::optional<double> window, long long cd_max_pieces, int threads) {
+                 std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
+                 int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
+                 int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd_softer_starts, window,
-                                     cd_max_pieces);
+                                     cd_max_pieces,
+                                     {cd_interior_states_pieces, cd_interior_states_stall, cd_interior_states_retries,
+                                      cd_interior_iterations});
   std::vector<ProbeResult> results;
   SignalPoll poll;
   s.nlgs.cancel = [&poll] { return poll(); };
@@ -317,7 +331,11 @@ void bind_compute(py::module_& m) {
         py::arg("g") = cd.nlgs.g, py::arg("dt") = py::none(), py::arg("velocity_tol") = cd.nlgs.velocity_tol,
         py::arg("max_sweeps") = cd.nlgs.max_sweeps, py::arg("cd_start") = cd_start_name(cd.cd.start),
         py::arg("cd_softer_starts") = cd.cd.softer_starts, py::arg("window") = py::none(),
-        py::arg("cd_max_pieces") = cd.cd.max_probe_pieces, py::arg("threads") = 0,
+        py::arg("cd_max_pieces") = cd.cd.max_probe_pieces,
+        py::arg("cd_interior_states_pieces") = cd.cd.interior_states_pieces,
+        py::arg("cd_interior_states_stall") = cd.cd.interior_states_stall,
+        py::arg("cd_interior_states_retries") = cd.cd.interior_states_retries,
+        py::arg("cd_interior_iterations") = cd.cd.interior_max_iterations, py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -328,7 +346,11 @@ void bind_compute(py::module_& m) {
         "to the cell, not the paper's probe (`unjam probe --window`; docs/probe.md, \"A window around "
         "the probed pair\"); None: the whole packing; cd_max_pieces: cd: stop a probe after this many pieces "
         "of its paths together (`unjam probe --cd-max-pieces`; docs/probe.md, \"A budget of pieces per "
-        "probe\"); 0: no limit");
+        "probe\"); 0: no limit; cd_interior_states_pieces, cd_interior_states_stall, "
+        "cd_interior_states_retries, cd_interior_iterations: the interior start's settings, as `unjam probe "
+        "--cd-interior-states-pieces`, `--cd-interior-states-stall`, `--cd-interior-states-retries`, "
+        "`--cd-interior-iterations` (docs/probe.md, \"The iterate's own states\", \"The interior-point "
+        "method's iterations\")");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

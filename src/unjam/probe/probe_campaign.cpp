@@ -221,6 +221,15 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
+  if (!(s.cd.interior_states_pieces >= 0.0 && std::isfinite(s.cd.interior_states_pieces)))
+    throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
+                std::to_string(s.cd.interior_states_pieces) + ")");
+  if (s.cd.interior_states_stall < 0)
+    throw Error("--cd-interior-states-stall must be >= 0 (got " + std::to_string(s.cd.interior_states_stall) + ")");
+  if (s.cd.interior_states_retries < 0)
+    throw Error("--cd-interior-states-retries must be >= 0 (got " + std::to_string(s.cd.interior_states_retries) + ")");
+  if (s.cd.interior_max_iterations < 1)
+    throw Error("--cd-interior-iterations must be >= 1 (got " + std::to_string(s.cd.interior_max_iterations) + ")");
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
