@@ -124,25 +124,14 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
   return run_compaction(std::move(p), a);
 }
 
-// The interior start's settings (`unjam probe --cd-interior-*`; CdPathSettings::interior_*).
-struct InteriorArgs {
-  double states_pieces;
-  int states_stall, states_retries, iterations;
-};
-
+// cd: the cd method's keywords (`unjam probe --cd-*`) but its start, named by cd_start.
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
                                 std::optional<double> dt, double velocity_tol, long long max_sweeps,
-                                const std::string& cd_start, int cd_softer_starts, std::optional<double> window,
-                                long long cd_max_pieces, const InteriorArgs& interior) {
+                                const std::string& cd_start, const CdPathSettings& cd, std::optional<double> window) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
+  s.cd = cd;
   s.cd.start = cd_start_from_name(cd_start);
-  s.cd.softer_starts = cd_softer_starts;
-  s.cd.interior_states_pieces = interior.states_pieces;
-  s.cd.interior_states_stall = interior.states_stall;
-  s.cd.interior_states_retries = interior.states_retries;
-  s.cd.interior_max_iterations = interior.iterations;
-  s.cd.max_probe_pieces = cd_max_pieces;
   s.nlgs.g = s.kinematic.g = g;
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
@@ -166,10 +155,14 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd_softer_starts, window,
-                                     cd_max_pieces,
-                                     {cd_interior_states_pieces, cd_interior_states_stall, cd_interior_states_retries,
-                                      cd_interior_iterations});
+  CdPathSettings cd;
+  cd.softer_starts = cd_softer_starts;
+  cd.max_probe_pieces = cd_max_pieces;
+  cd.interior_states_pieces = cd_interior_states_pieces;
+  cd.interior_states_stall = cd_interior_states_stall;
+  cd.interior_states_retries = cd_interior_states_retries;
+  cd.interior_max_iterations = cd_interior_iterations;
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   s.nlgs.cancel = [&poll] { return poll(); };
