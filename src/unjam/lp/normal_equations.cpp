@@ -2,22 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>  // Eigen's MetisSupport reports METIS errors on std::cerr
 
-#include <Eigen/MetisSupport>
 #include <Eigen/SparseCore>
 #include <coin/ClpInterior.hpp>
+
+#include "unjam/core/nested_dissection.hpp"
 
 namespace unjam {
 
 namespace {
 
-// A fill-reducing ordering of A D A^T by METIS's nested dissection, as CLP stores it:
-// permute[new] = old row. Dense rows of A (more than 10x the mean count and 100 entries, as
-// the pressure row: its row of A D A^T is full) would make every separator large; they are
-// left out of the graph and ordered last, as a minimum-degree ordering does. Empty if METIS
-// fails (Eigen then reports on std::cerr and returns no permutation).
-std::vector<int> nested_dissection_order(const ClpMatrixBase& A, int rows) {
+// A fill-reducing ordering of A D A^T by METIS's nested dissection (core/nested_dissection),
+// as CLP stores it: permute[new] = old row. The dense rows of A (as the pressure row: its row
+// of A D A^T is full) are ordered last. Empty if METIS fails.
+std::vector<int> normal_equations_order(const ClpMatrixBase& A, int rows) {
   const int cols = A.getNumCols();
   const CoinBigIndex* start = A.getVectorStarts();
   const int* length = A.getVectorLengths();
@@ -25,33 +23,14 @@ std::vector<int> nested_dissection_order(const ClpMatrixBase& A, int rows) {
   std::vector<int> count(rows, 0);
   for (int j = 0; j < cols; ++j)
     for (CoinBigIndex e = start[j]; e < start[j] + length[j]; ++e) ++count[row[e]];
-  const double dense_count = std::max(100.0, 10.0 * A.getNumElements() / std::max(rows, 1));
-  std::vector<int> sparse_index(rows, -1), sparse_rows, dense_rows;
-  for (int i = 0; i < rows; ++i) {
-    if (count[i] > dense_count) {
-      dense_rows.push_back(i);
-    } else {
-      sparse_index[i] = static_cast<int>(sparse_rows.size());
-      sparse_rows.push_back(i);
-    }
-  }
-  // Pattern of B B^T, B = the sparse rows of A.
+  // Pattern of A A^T.
   std::vector<Eigen::Triplet<double, int>> entries;
   for (int j = 0; j < cols; ++j)
-    for (CoinBigIndex e = start[j]; e < start[j] + length[j]; ++e)
-      if (sparse_index[row[e]] >= 0) entries.emplace_back(sparse_index[row[e]], j, 1.0);
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> B(static_cast<int>(sparse_rows.size()),
-                                                      cols);
+    for (CoinBigIndex e = start[j]; e < start[j] + length[j]; ++e) entries.emplace_back(row[e], j, 1.0);
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> B(rows, cols);
   B.setFromTriplets(entries.begin(), entries.end());
   const Eigen::SparseMatrix<double, Eigen::ColMajor, int> BBt = B * B.transpose();
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P;
-  Eigen::MetisOrdering<int>()(BBt, P);  // P.indices()[new] = old, as METIS's perm
-  if (P.size() != static_cast<Eigen::Index>(sparse_rows.size())) return {};
-  std::vector<int> permute;
-  permute.reserve(rows);
-  for (int i = 0; i < P.size(); ++i) permute.push_back(sparse_rows[P.indices()[i]]);
-  permute.insert(permute.end(), dense_rows.begin(), dense_rows.end());
-  return permute;
+  return nested_dissection_order(BBt, dense_rows(count, A.getNumElements()));
 }
 
 }  // namespace
@@ -72,7 +51,7 @@ int NormalEquationsCholesky::order(ClpInterior* model) {
   // matrices its minimum-degree permutation is then replaced (kept if METIS fails).
   const int status = ClpCholeskyBase::order(model);
   if (status != 0 || numberRows_ < nested_dissection_rows_) return status;
-  const std::vector<int> permute = nested_dissection_order(*model->clpMatrix(), numberRows_);
+  const std::vector<int> permute = normal_equations_order(*model->clpMatrix(), numberRows_);
   if (permute.empty()) return 0;
   for (int i = 0; i < numberRows_; ++i) {
     permute_[i] = permute[i];

@@ -12,9 +12,24 @@
 
 namespace unjam {
 
+// How KLU picks its pivots at a fresh factorisation (docs/benchmarks.md, section 10, "The
+// interior point's factorisations").
+enum class KluPivoting {
+  // KLU's partial pivoting (threshold 1e-3: the diagonal while it is at least 1e-3 of its
+  // column's largest entry) on its AMD ordering.
+  partial,
+  // From 3000 rows on (~1000 disks; below, as partial): the diagonal while it is at least 1e-6 of its
+  // column's largest entry, on METIS's nested dissection of S + S^T, the pressure's row and
+  // column last. On the probe's systems a third to half of partial pivoting's fill (at 2000
+  // disks, 0.39 M entries in L instead of 1.30 M). Where its pivots grow (reciprocal pivot
+  // growth below 1e-8) the factorisation is done again by partial pivoting. Solves with
+  // these factors are less accurate by up to the pivots' growth: refine them.
+  diagonal,
+};
+
 class KluFactor {
  public:
-  KluFactor();
+  explicit KluFactor(KluPivoting pivoting = KluPivoting::partial);
   ~KluFactor();
   KluFactor(const KluFactor&) = delete;
   KluFactor& operator=(const KluFactor&) = delete;
@@ -25,8 +40,12 @@ class KluFactor {
   // B <- S^-1 B, all columns in one pass over the factors.
   void solve_in_place(Eigen::MatrixXd& B);
   void solve_in_place(Eigen::VectorXd& b);
-  // Factorisations done afresh (not refactorised) so far.
+  // Factorisations done afresh (not refactorised) so far, the diagonal's attempts included.
   int fresh() const;
+  // The present factors have the diagonal's pivots (KluPivoting::diagonal, not fallen back).
+  bool diagonal_pivots() const;
+  // Entries of L + U (the diagonal counted once in each) of the present factors; 0 before the first.
+  double factor_nonzeros() const;
 
  private:
   struct Impl;
