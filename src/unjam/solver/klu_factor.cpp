@@ -70,7 +70,7 @@ bool KluFactor::factorize(Eigen::SparseMatrix<double>& S, bool reuse_pivots) {
     ++k.fresh;
     k.diagonal_pivots = false;
   };
-  if (diagonal) {  // the diagonal's pivots, unless they grow as the refactorisation may not
+  if (diagonal) {  // the diagonal's pivots, unless they grow more than a refactorisation may
     fresh(kDiagonalTolerance);
     k.diagonal_pivots = k.numeric &&
         klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) &&
