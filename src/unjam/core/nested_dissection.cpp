@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <iostream>  // Eigen's MetisSupport reports METIS errors on std::cerr
+#include <numeric>
 
 #include <Eigen/MetisSupport>
 
 namespace unjam {
 
-std::vector<bool> dense_rows(const std::vector<int>& count, long entries) {
+std::vector<bool> dense_rows(const std::vector<int>& count) {
+  const double entries = std::accumulate(count.begin(), count.end(), 0.0);
   const double n = static_cast<double>(std::max<std::size_t>(count.size(), 1));
-  const double dense_count = std::max(100.0, 10.0 * static_cast<double>(entries) / n);
+  const double dense_count = std::max(100.0, 10.0 * entries / n);
   std::vector<bool> dense(count.size());
   for (std::size_t i = 0; i < count.size(); ++i) dense[i] = count[i] > dense_count;
   return dense;

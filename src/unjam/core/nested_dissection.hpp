@@ -8,10 +8,10 @@
 
 namespace unjam {
 
-// The dense rows of a matrix whose rows have count[i] entries, entries in all: more than
-// 10x the mean count and more than 100 entries (as a pressure degree of freedom coupled to
-// every contact). In a nested dissection they would make every separator large.
-std::vector<bool> dense_rows(const std::vector<int>& count, long entries);
+// The dense rows of a matrix whose rows have count[i] entries: more than 10x the mean count
+// and more than 100 entries (as a pressure degree of freedom coupled to every contact). In a
+// nested dissection they would make every separator large.
+std::vector<bool> dense_rows(const std::vector<int>& count);
 
 // The ordering of a symmetric sparsity pattern P (values ignored; the pattern of P + P^T is
 // read): permute[new] = old. The rows marked dense are left out of the graph and ordered last,

@@ -30,7 +30,7 @@ std::vector<int> normal_equations_order(const ClpMatrixBase& A, int rows) {
   Eigen::SparseMatrix<double, Eigen::ColMajor, int> B(rows, cols);
   B.setFromTriplets(entries.begin(), entries.end());
   const Eigen::SparseMatrix<double, Eigen::ColMajor, int> BBt = B * B.transpose();
-  return nested_dissection_order(BBt, dense_rows(count, A.getNumElements()));
+  return nested_dissection_order(BBt, dense_rows(count));
 }
 
 }  // namespace

@@ -526,7 +526,7 @@ class StepPath {
   Eigen::SparseMatrix<double> W_;  // A_G^T M_G^-1 A_G: the Delassus operator of the grains
   Eigen::VectorXd a_p_;            // the pressure row of A
   Eigen::SparseMatrix<double> S_;  // S_b: the matrix last factorised
-  mutable KluFactor lu_{KluPivoting::diagonal};
+  mutable KluFactor lu_;
   bool reuse_pivots_ = true;
   // The rows changed since S_b (see set_state): their slots, Z = S_b^-1 E, D^T, C's LU.
   static constexpr double kMinCapacitanceRcond = 0.0;  // i.e. only a singular C

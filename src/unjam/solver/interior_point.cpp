@@ -119,7 +119,7 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   Eigen::VectorXd row_scale = Eigen::VectorXd::Ones(nf + 1);
   // Per contact: e1, e2, E (above), and c of its tangential row (b is its row scale, -b).
   Eigen::VectorXd te1(nc), te2(nc), tE(nc), tc(nc);
-  KluFactor lu(KluPivoting::diagonal);
+  KluFactor lu;
 
   InteriorPointResult r;
   std::vector<double> history;
@@ -190,9 +190,11 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
                         (e2 - e1) * y[j + 3]) / tE[k];  // a
       }
       d[nf] = -rb[nG];
-      const Eigen::VectorXd rhs = d;
+      // One step of iterative refinement where the factors keep the diagonal's pivots (KluPivoting).
+      const bool refine = lu.diagonal_pivots();
+      const Eigen::VectorXd rhs = refine ? d : Eigen::VectorXd();
       lu.solve_in_place(d);
-      if (lu.diagonal_pivots()) {  // one step of iterative refinement (KluPivoting::diagonal)
+      if (refine) {
         Eigen::VectorXd correction = rhs - K * d;
         lu.solve_in_place(correction);
         d += correction;

@@ -20,13 +20,10 @@ constexpr double kPartialTolerance = 1e-3;  // KLU's default
 
 // S + S^T's ordering by nested dissection, the pressure row and column last; empty if METIS fails.
 std::vector<int> symmetric_order(const Eigen::SparseMatrix<double>& S) {
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> P = S;
-  const Eigen::SparseMatrix<double, Eigen::ColMajor, int> Pt = P.transpose();
-  P += Pt;
-  std::vector<int> count(static_cast<std::size_t>(P.rows()), 0);
-  for (int j = 0; j < P.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double, Eigen::ColMajor, int>::InnerIterator it(P, j); it; ++it) ++count[it.row()];
-  return nested_dissection_order(P, dense_rows(count, P.nonZeros()));
+  const Eigen::SparseMatrix<double> P = S + Eigen::SparseMatrix<double>(S.transpose());
+  std::vector<int> count(static_cast<std::size_t>(P.cols()));  // P is symmetric: its rows' counts
+  for (int j = 0; j < P.outerSize(); ++j) count[static_cast<std::size_t>(j)] = static_cast<int>(P.innerVector(j).nonZeros());
+  return nested_dissection_order(P, dense_rows(count));
 }
 }  // namespace
 
@@ -58,10 +55,12 @@ bool KluFactor::factorize(Eigen::SparseMatrix<double>& S, bool reuse_pivots) {
   }
   if (!k.symbolic) k.symbolic = klu_analyze(n, S.outerIndexPtr(), S.innerIndexPtr(), &k.common);
   if (!k.symbolic) return false;
+  const auto stable = [&] {
+    return klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) &&
+           k.common.rgrowth > kMinGrowth;
+  };
   if (k.numeric && reuse_pivots &&
-      klu_refactor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) &&
-      klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) &&
-      k.common.rgrowth > kMinGrowth)
+      klu_refactor(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) && stable())
     return true;
   const auto fresh = [&](double tol) {
     if (k.numeric) klu_free_numeric(&k.numeric, &k.common);
@@ -72,9 +71,7 @@ bool KluFactor::factorize(Eigen::SparseMatrix<double>& S, bool reuse_pivots) {
   };
   if (diagonal) {  // the diagonal's pivots, unless they grow more than a refactorisation may
     fresh(kDiagonalTolerance);
-    k.diagonal_pivots = k.numeric &&
-        klu_rgrowth(S.outerIndexPtr(), S.innerIndexPtr(), S.valuePtr(), k.symbolic, k.numeric, &k.common) &&
-        k.common.rgrowth > kMinGrowth;
+    k.diagonal_pivots = k.numeric && stable();
     if (k.diagonal_pivots) return true;
   }
   fresh(kPartialTolerance);

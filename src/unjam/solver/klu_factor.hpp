@@ -12,8 +12,8 @@
 
 namespace unjam {
 
-// How KLU picks its pivots at a fresh factorisation (docs/benchmarks.md, section 10, "The
-// interior point's factorisations").
+// How KLU picks its pivots at a fresh factorisation (docs/benchmarks.md, section 10,
+// "Diagonal pivots on nested dissection from 3000 rows").
 enum class KluPivoting {
   // KLU's partial pivoting (threshold 1e-3: the diagonal while it is at least 1e-3 of its
   // column's largest entry) on its AMD ordering.
@@ -29,7 +29,7 @@ enum class KluPivoting {
 
 class KluFactor {
  public:
-  explicit KluFactor(KluPivoting pivoting = KluPivoting::partial);
+  explicit KluFactor(KluPivoting pivoting = KluPivoting::diagonal);
   ~KluFactor();
   KluFactor(const KluFactor&) = delete;
   KluFactor& operator=(const KluFactor&) = delete;
