@@ -4,6 +4,7 @@
 // and against the converged NLGS probe.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -761,6 +762,80 @@ TEST(InteriorPoint, ConvergesToTheFrictionlessStepsSolution) {
   bad.velocity_scale = 1.0;
   bad.max_iterations = 0;
   EXPECT_THROW(interior_point_step(build_cd_step(p, 1, s), bad), Error);
+}
+
+TEST(InteriorPoint, TheWideNeighbourhoodKeepsThePairsOffTheBoundary) {
+  // Plain Mehrotra may drive a few complementary pairs to z w ~ 0 ahead of the others; its
+  // steps then shrink to nothing and it stalls far from a solution. On contact 48 of
+  // p200-mu1 it does (measured: 100 iterations, natural residual 0.53, the centrality
+  // min z w / mean z w down to 2e-7). In the wide neighbourhood every step keeps the
+  // centrality at least min(gamma, the iterate's own), and the method ends near a solution
+  // (measured: 24 iterations, 1 by plain Newton steps, natural residual 2e-6, the step's
+  // residual 1.3e-6 g; docs/probe.md, "Keeping the iterates centred").
+  const Packing& p = fixture("p200-mu1");
+  const ProbeSettings s = quasi_static_step();
+  const int k = 48;
+  const CdStepProblem pb = build_cd_step(p, k, s);
+  InteriorPointSettings plain;
+  plain.velocity_scale = pb.g / (pb.dt * pb.dt);
+  plain.max_iterations = 100;
+  InteriorPointSettings wide = plain;
+  wide.neighbourhood = 1e-3;
+  const InteriorPointResult a = interior_point_step(pb, plain), b = interior_point_step(pb, wide);
+  EXPECT_TRUE(a.stalled);
+  EXPECT_GT(a.natural_residual, 0.1);
+  EXPECT_EQ(a.short_steps, 0);
+  ASSERT_EQ(a.centrality.size(), static_cast<std::size_t>(a.iterations) + 1);
+  EXPECT_LT(*std::min_element(a.centrality.begin(), a.centrality.end()), 1e-5);
+  EXPECT_LT(b.natural_residual, 1e-4);
+  EXPECT_LT(b.iterations, 50);
+  EXPECT_GT(b.short_steps, 0);
+  ASSERT_EQ(b.centrality.size(), static_cast<std::size_t>(b.iterations) + 1);
+  for (std::size_t i = 1; i < b.centrality.size(); ++i)
+    EXPECT_GE(b.centrality[i], (1.0 - 1e-9) * std::min(wide.neighbourhood, b.centrality[i - 1])) << "iteration " << i;
+  EXPECT_LT(cd_step_residual(pb, b.f).max(), 1e-4);  // near a solution (in g)
+  // The exact probe with interior_neighbourhood runs it where plain Mehrotra ends above
+  // interior_again_above, keeps the better iterate and is exact from it; without (the default)
+  // there is no second run.
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  interior.interior_neighbourhood = 1e-3;
+  CdPathStats st;
+  const CdStepSolution sol = probe_cd_path(p, k, s, interior, &st);
+  EXPECT_EQ(st.interior_iterations, a.iterations);
+  EXPECT_EQ(st.interior_residual, a.natural_residual);
+  EXPECT_EQ(st.interior_again_iterations, b.iterations);
+  EXPECT_EQ(st.interior_again_short_steps, b.short_steps);
+  EXPECT_EQ(st.interior_again_residual, b.natural_residual);
+  EXPECT_TRUE(st.interior_again_kept);
+  ASSERT_TRUE(sol.result.converged);
+  EXPECT_LE(cd_step_residual(pb, sol.f).max(), kExactStepTolerance);
+  CdPathSettings off = interior;
+  off.interior_neighbourhood = CdPathSettings{}.interior_neighbourhood;  // off by default
+  EXPECT_EQ(off.interior_neighbourhood, 0.0);
+  CdPathStats st_off;
+  probe_cd_path(p, k, s, off, &st_off);
+  EXPECT_EQ(st_off.interior_again_iterations, 0);
+  EXPECT_FALSE(st_off.interior_again_kept);
+  // Where plain Mehrotra ends near a solution there is no second run (contact 20: 7e-6).
+  CdPathStats st20;
+  probe_cd_path(p, 20, s, interior, &st20);
+  EXPECT_LE(st20.interior_residual, interior.interior_again_above);
+  EXPECT_EQ(st20.interior_again_iterations, 0);
+  for (const double bad : {-0.1, 1.0, std::nan("")}) {
+    InteriorPointSettings w = wide;
+    w.neighbourhood = bad;
+    EXPECT_THROW(interior_point_step(pb, w), Error) << bad;
+    CdPathSettings c = interior;
+    c.interior_neighbourhood = bad;
+    EXPECT_THROW(probe_cd_path(p, k, s, c), Error) << bad;
+  }
+  InteriorPointSettings w = wide;
+  w.short_step = 1.5;
+  EXPECT_THROW(interior_point_step(pb, w), Error);
+  CdPathSettings c = interior;
+  c.interior_again_above = -1.0;
+  EXPECT_THROW(probe_cd_path(p, k, s, c), Error);
 }
 
 TEST(CdPath, ThePathFromTheIteratesStatesIsCutWhereItStopsGainingGround) {

@@ -628,6 +628,7 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   EXPECT_EQ(j["settings"]["cd_interior_states_stall"], 20);  // CdPathSettings::interior_states_stall
   EXPECT_EQ(j["settings"]["cd_interior_states_retries"], 2);  // CdPathSettings::interior_states_retries
   EXPECT_EQ(j["settings"]["cd_interior_iterations"], 100);  // CdPathSettings::interior_max_iterations
+  EXPECT_FALSE(j["settings"].contains("cd_interior_neighbourhood"));  // off by default, recorded where on
   EXPECT_EQ(j["settings"]["cd_softer_starts"], 2);
   const int k = static_cast<int>(a.integer(0, a.column("contact")));
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) + " --method cd --cd-start interior --out " +
@@ -660,6 +661,9 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   r = run_tool("probe " + q(dir_) + part + " --cd-interior-iterations 40");
   EXPECT_NE(r.exit_code, 0) << r.output;  // nor under the interior-point method's former cap
   EXPECT_NE(r.output.find("cd_interior_iterations"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(dir_) + part + " --cd-interior-neighbourhood 1e-3");
+  EXPECT_NE(r.exit_code, 0) << r.output;  // nor with the interior-point method's second run
+  EXPECT_NE(r.output.find("cd_interior_neighbourhood"), std::string::npos) << r.output;
   r = run_tool("probe " + q(dir_) + part);
   EXPECT_EQ(r.exit_code, 0) << r.output;  // and resumes with its own
   // Under the former cap of 40 the key is not recorded, so the checkpoints made before it was a
@@ -685,6 +689,27 @@ TEST_F(CliProbe, TheInteriorPointStartIsRecordedExactAndTheSameForAnyThreadCount
   r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
                " --method cd --cd-start interior --cd-interior-iterations 0 --out " + q(root_ / "bad4"));
   EXPECT_NE(r.exit_code, 0) << r.output;
+  for (const char* bad : {"-0.5", "1", "nan"}) {
+    r = run_tool("probe " + q(dir_) + " --contact " + std::to_string(k) +
+                 " --method cd --cd-start interior --cd-interior-neighbourhood " + bad + " --out " + q(root_ / "bad5"));
+    EXPECT_NE(r.exit_code, 0) << bad << "\n" << r.output;
+  }
+}
+
+TEST_F(CliProbe, SaysWhenTheInteriorPointMethodRanAgainInTheWideNeighbourhood) {
+  // Contact 48 of p200-mu1: plain Mehrotra stalls at a natural residual of 0.53, the second run
+  // in the wide neighbourhood ends at 2e-6 and its iterate is the start (docs/probe.md,
+  // "Keeping the iterates centred"); without --cd-interior-neighbourhood there is no second run.
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  testing::ToolRun r = run_tool("probe " + q(p200) + " --contact 48 --method cd --cd-start interior "
+                                "--cd-interior-neighbourhood 1e-3 --threads 1 --out " + q(root_ / "wide"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("interior-point start: 100 iterations, natural residual 5."), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("again in the wide neighbourhood: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("its iterate is the start"), std::string::npos) << r.output;
+  r = run_tool("probe " + q(p200) + " --contact 48 --method cd --cd-start interior --threads 1 --out " +
+               q(root_ / "plain"));
+  EXPECT_EQ(r.output.find("again in the wide neighbourhood"), std::string::npos) << r.output;
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

@@ -154,7 +154,8 @@ def signature_defaults(function):
                             "cd-interior-states-pieces": "cd_interior_states_pieces",
                             "cd-interior-states-stall": "cd_interior_states_stall",
                             "cd-interior-states-retries": "cd_interior_states_retries",
-                            "cd-interior-iterations": "cd_interior_iterations"}),
+                            "cd-interior-iterations": "cd_interior_iterations",
+                            "cd-interior-neighbourhood": "cd_interior_neighbourhood"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -259,9 +260,28 @@ def test_the_interior_start_takes_its_settings_as_the_tool(p50, tmp_path):
                                      ("cd_interior_states_pieces", -0.5, "--cd-interior-states-pieces must be >= 0"),
                                      ("cd_interior_states_pieces", float("nan"), "must be >= 0 and finite"),
                                      ("cd_interior_states_stall", -1, "--cd-interior-states-stall must be >= 0"),
-                                     ("cd_interior_states_retries", -1, "--cd-interior-states-retries must be >= 0")]:
+                                     ("cd_interior_states_retries", -1, "--cd-interior-states-retries must be >= 0"),
+                                     ("cd_interior_neighbourhood", 1.0, "--cd-interior-neighbourhood must be in")]:
         with pytest.raises(unjam.Error, match=message):
             unjam.probe(p50, contact=32, method="cd", cd_start="interior", **{argument: value})
+
+
+def test_the_interior_start_takes_its_neighbourhood_as_the_tool(tmp_path):
+    # cd_interior_neighbourhood as `unjam probe --cd-interior-neighbourhood`: on contact 48 of
+    # p200-mu1 plain Mehrotra stalls (natural residual 0.53) and the second run in the wide
+    # neighbourhood starts the path at the step's solution (0 pieces); without it the paths take
+    # 118 pieces to the same F_crit (docs/probe.md, "Keeping the iterates centred").
+    fixture = str(Path(__file__).parent / "fixtures" / "p200-mu1")
+    p = unjam.read_packing(fixture)
+    for value, pieces in [(1e-3, 0), (0, 118)]:
+        out = tmp_path / str(value)
+        tool("probe", fixture, "--contact", 48, "--method", "cd", "--cd-start", "interior",
+             "--cd-interior-neighbourhood", value, "--threads", 1, "--out", out, "--quiet")
+        rows = read_csv(out / "probe-48.csv")
+        r = unjam.probe(p, contact=48, method="cd", cd_start="interior", cd_interior_neighbourhood=value)
+        assert r.converged and r.sweeps == pieces, (value, r.sweeps)
+        assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
+        assert abs(r.f_crit / (1.382824 * p.F0) - 1.0) < 1e-6
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -181,6 +181,11 @@ void print_cd_paths(const CdPathStats& stats) {
   if (stats.interior_iterations > 0)
     std::printf("  interior-point start: %d iterations, natural residual %.2e (F0, g / dt^2)\n",
                 stats.interior_iterations, stats.interior_residual);
+  if (stats.interior_again_iterations > 0)
+    std::printf("  again in the wide neighbourhood: %d iterations (%d by plain Newton steps), natural residual %.2e; "
+                "%s\n",
+                stats.interior_again_iterations, stats.interior_again_short_steps, stats.interior_again_residual,
+                stats.interior_again_kept ? "its iterate is the start" : "the first iterate is the start");
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
     std::printf("  path %zu %sat compliance %.3g: ", i + 1, a.iterate_states ? "from the interior point's states " : "",
@@ -635,6 +640,13 @@ void add_probe_command(CLI::App& app) {
                   "end it at 40-50 at 500-2000 disks; docs/probe.md, \"The interior-point method's iterations\")")
       ->capture_default_str()
       ->check(positive_number());
+  cmd->add_option("--cd-interior-neighbourhood", o->cd.interior_neighbourhood,
+                  "cd, interior start: where the interior-point method ends at a natural residual above 1e-3, run "
+                  "it again with every pair's z w kept above this fraction of their mean, and start from the "
+                  "iterate with the lower residual (0: no second run; e.g. 1e-3; in [0, 1); "
+                  "docs/probe.md, \"Keeping the iterates centred\")")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--cd-max-pieces", o->cd.max_probe_pieces,
                   "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
                   "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "

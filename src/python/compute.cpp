@@ -152,7 +152,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
-                 int threads) {
+                 double cd_interior_neighbourhood, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd;
@@ -162,6 +162,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   cd.interior_states_stall = cd_interior_states_stall;
   cd.interior_states_retries = cd_interior_states_retries;
   cd.interior_max_iterations = cd_interior_iterations;
+  cd.interior_neighbourhood = cd_interior_neighbourhood;
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
@@ -328,7 +329,8 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_states_pieces") = cd.cd.interior_states_pieces,
         py::arg("cd_interior_states_stall") = cd.cd.interior_states_stall,
         py::arg("cd_interior_states_retries") = cd.cd.interior_states_retries,
-        py::arg("cd_interior_iterations") = cd.cd.interior_max_iterations, py::arg("threads") = 0,
+        py::arg("cd_interior_iterations") = cd.cd.interior_max_iterations,
+        py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood, py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -340,10 +342,11 @@ void bind_compute(py::module_& m) {
         "the probed pair\"); None: the whole packing; cd_max_pieces: cd: stop a probe after this many pieces "
         "of its paths together (`unjam probe --cd-max-pieces`; docs/probe.md, \"A budget of pieces per "
         "probe\"); 0: no limit; cd_interior_states_pieces, cd_interior_states_stall, "
-        "cd_interior_states_retries, cd_interior_iterations: the interior start's settings, as `unjam probe "
-        "--cd-interior-states-pieces`, `--cd-interior-states-stall`, `--cd-interior-states-retries`, "
-        "`--cd-interior-iterations` (docs/probe.md, \"The iterate's own states\", \"The interior-point "
-        "method's iterations\")");
+        "cd_interior_states_retries, cd_interior_iterations, cd_interior_neighbourhood: the interior start's "
+        "settings, as `unjam probe --cd-interior-states-pieces`, `--cd-interior-states-stall`, "
+        "`--cd-interior-states-retries`, `--cd-interior-iterations`, `--cd-interior-neighbourhood` "
+        "(docs/probe.md, \"The iterate's own states\", \"The interior-point method's iterations\", "
+        "\"Keeping the iterates centred\")");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -74,7 +74,12 @@ struct CdPathSettings {
   // every piece, where it fails it turns back early and wanders there (docs/probe.md, "The
   // iterate's own states"). Where that path is not exact it is followed again at 10 times
   // interior_compliance (still lowered to interior_rigid), interior_states_retries times, each
-  // at 10 times the last, before the paths from the forces' states.
+  // at 10 times the last, before the paths from the forces' states. Where the interior-point
+  // method (plain Mehrotra) ends at a natural residual above interior_again_above, it runs again
+  // in the wide neighbourhood interior_neighbourhood (InteriorPointSettings::neighbourhood), and
+  // the iterate with the lower natural residual is the start (0, the default: no second run;
+  // it helps at 8000 disks and costs pieces at 500 disks, mu = 1; docs/probe.md, "Keeping the
+  // iterates centred").
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
   double interior_states_pieces = 0.1;
@@ -82,6 +87,8 @@ struct CdPathSettings {
   int interior_states_retries = 2;
   int interior_path_pieces = 1;
   int interior_max_iterations = 100;
+  double interior_neighbourhood = 0.0;  // e.g. 1e-3
+  double interior_again_above = 1e-3;
   double compliance = 1e-7;   // kappa F0 dt^2 / g: closing displacement per F0 of force change
   int max_pieces = 0;         // 0: 50 (number of contacts) + 1000
   int refinements = 4;        // proximal steps at lambda = 1 (the compliance's displacement removed)
@@ -143,6 +150,12 @@ struct CdPathStats {
                                 // lowering of the returned attempt stopped; 0 if it did not
   int interior_iterations = 0;  // interior_point: iterations of the interior-point method
   double interior_residual = 0.0;  // interior_point: its natural residual at the end (F0, g / dt^2)
+  // interior_point, where it ran again in the neighbourhood: that run's iterations, plain Newton
+  // steps among them (InteriorPointResult::short_steps) and natural residual, and whether its
+  // iterate is the start; 0 iterations where it did not run
+  int interior_again_iterations = 0, interior_again_short_steps = 0;
+  double interior_again_residual = 0.0;
+  bool interior_again_kept = false;
   int restarts = 0;           // compliant: paths followed after the first (restarts below where a
                               // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the

@@ -230,6 +230,8 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-interior-states-retries must be >= 0 (got " + std::to_string(s.cd.interior_states_retries) + ")");
   if (s.cd.interior_max_iterations < 1)
     throw Error("--cd-interior-iterations must be >= 1 (got " + std::to_string(s.cd.interior_max_iterations) + ")");
+  if (!(s.cd.interior_neighbourhood >= 0.0 && s.cd.interior_neighbourhood < 1.0))
+    throw Error("--cd-interior-neighbourhood must be in [0, 1) (got " + std::to_string(s.cd.interior_neighbourhood) + ")");
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
@@ -446,6 +448,9 @@ nlohmann::json to_json(const CampaignSettings& s) {
       // the checkpoints made before it was a setting, so that those still resume.
       if (s.cd.interior_max_iterations != kUnrecordedInteriorIterations)
         j["cd_interior_iterations"] = s.cd.interior_max_iterations;
+      // Its second run in the wide neighbourhood: recorded where on, so that a checkpoint made
+      // with it resumes only with it, and one made without (or before it) only without.
+      if (s.cd.interior_neighbourhood > 0.0) j["cd_interior_neighbourhood"] = s.cd.interior_neighbourhood;
     }
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start

@@ -33,6 +33,10 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
     throw Error("interior point: velocity_scale must be positive (got " + std::to_string(s.velocity_scale) + ")");
   if (s.max_iterations < 1 || s.stall_iterations < 1)
     throw Error("interior point: max_iterations and stall_iterations must be >= 1");
+  if (!(s.neighbourhood >= 0.0 && s.neighbourhood < 1.0))
+    throw Error("interior point: neighbourhood must be in [0, 1) (got " + std::to_string(s.neighbourhood) + ")");
+  if (!(s.short_step >= 0.0 && s.short_step <= 1.0))
+    throw Error("interior point: short_step must be in [0, 1] (got " + std::to_string(s.short_step) + ")");
   const Eigen::SparseMatrix<double>& A = pb.system.A;
   const int n = static_cast<int>(A.rows()), nc = pb.num_contacts();
   const double mu = pb.system.mu, F0 = pb.system.F0, U = s.velocity_scale, dt2 = pb.dt * pb.dt;
@@ -126,6 +130,7 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
   for (;;) {
     const double t = z.dot(w) / m;
     history.push_back(t);
+    r.centrality.push_back(z.cwiseProduct(w).minCoeff() / t);
     if (t < s.target) break;
     if (r.iterations >= s.max_iterations) {
       r.stalled = true;
@@ -231,7 +236,27 @@ InteriorPointResult interior_point_step(const ContactProblem& pb, const Interior
     const Eigen::VectorXd rc =
         Eigen::VectorXd::Constant(m, sigma * t) - z.cwiseProduct(w) - dz.cwiseProduct(dw);
     newton(rc, dv, dz, dw);  // corrector
-    const double a = 0.995 * std::min(step_to_boundary(z, dz), step_to_boundary(w, dw));
+    double a = 0.995 * std::min(step_to_boundary(z, dz), step_to_boundary(w, dw));
+    if (s.neighbourhood > 0.0) {
+      // The wide neighbourhood: min z w >= gamma mean z w at the new iterate (header).
+      const double gamma = std::min(s.neighbourhood, r.centrality.back());
+      const auto cut = [&](double step) {
+        for (; step > 1e-8; step *= 0.7) {
+          const Eigen::VectorXd zw = (z + step * dz).cwiseProduct(w + step * dw);
+          if (zw.minCoeff() >= gamma * zw.mean()) break;
+        }
+        return step;
+      };
+      a = cut(a);
+      if (a < s.short_step) {  // plain Newton steps towards sigma t in its place
+        ++r.short_steps;
+        for (const double towards : {0.3, 0.6, 0.9, 1.0}) {
+          newton(Eigen::VectorXd::Constant(m, towards * t) - z.cwiseProduct(w), dv, dz, dw);
+          a = cut(0.995 * std::min(step_to_boundary(z, dz), step_to_boundary(w, dw)));
+          if (a >= 0.5) break;
+        }
+      }
+    }
     v += a * dv;
     z += a * dz;
     w += a * dw;

@@ -28,6 +28,18 @@ struct InteriorPointSettings {
   double target = 1e-8;         // stop where the mean of z w (scaled by F0 and velocity_scale) is below
   int stall_iterations = 8;     // stop where that mean has not halved over this many iterations,
   double stall_below = 1e-2;    // once it is below this
+  // The wide neighbourhood (docs/probe.md, "Keeping the iterates centred"): every step is
+  // shortened (by factors 0.7) until the new iterate has min z w >= gamma (mean z w), gamma =
+  // the smaller of `neighbourhood` and the present iterate's own min z w / mean z w, so that
+  // no pair is driven to the boundary ahead of the others. 0: plain Mehrotra, no such cut
+  // (the exact probe runs it so where plain Mehrotra ends far from a solution,
+  // CdPathSettings::interior_neighbourhood).
+  double neighbourhood = 0.0;
+  // Where the predictor-corrector step, so cut, is shorter than `short_step`, plain Newton
+  // steps towards sigma t (no second-order term) are tried in its place, sigma = 0.3, 0.6,
+  // 0.9 and 1, each cut in the same way; the first that goes at least half way is taken,
+  // else the last (a centring step). Only with neighbourhood > 0.
+  double short_step = 0.1;
 };
 
 struct InteriorPointResult {
@@ -37,6 +49,8 @@ struct InteriorPointResult {
   double complementarity = 0.0; // mean z w at the end (scaled)
   double natural_residual = 0.0;  // max |min(z, w)| at the end (scaled: F0, velocity_scale)
   bool stalled = false;         // stopped short of the target: max_iterations, the stall test or a singular system
+  int short_steps = 0;          // iterations that took a plain Newton step in place of the predictor-corrector's
+  std::vector<double> centrality;  // min z w / mean z w of every iterate, the start's first
   // Per contact, which member of each complementary pair is the larger at the end (the
   // iterate's own reading of the states, where the forces alone are ambiguous): closed where
   // fn > w_fn (the normal displacement's complement), sliding where sigma > w_sigma =
@@ -45,7 +59,8 @@ struct InteriorPointResult {
   std::vector<bool> closed, sliding;
 };
 
-// Throws unjam::Error for a velocity_scale that is not positive, or non-positive iteration counts.
+// Throws unjam::Error for a velocity_scale that is not positive, non-positive iteration counts,
+// a neighbourhood outside [0, 1) or a short_step outside [0, 1].
 InteriorPointResult interior_point_step(const ContactProblem& problem, const InteriorPointSettings& settings);
 
 }  // namespace unjam
