@@ -817,6 +817,42 @@ TEST(InteriorPoint, TheWideNeighbourhoodKeepsThePairsOffTheBoundary) {
   probe_cd_path(p, k, s, off, &st_off);
   EXPECT_EQ(st_off.interior_again_iterations, 0);
   EXPECT_FALSE(st_off.interior_again_kept);
+  // Where no path from the start's iterate is exact, the paths from the other iterate follow,
+  // before the compliant continuation (contact 4: 5 paths from the second run's iterate, 5
+  // from plain Mehrotra's, the continuation exact in the 11th).
+  CdPathStats st4;
+  const CdStepSolution sol4 = probe_cd_path(p, 4, s, interior, &st4);
+  ASSERT_TRUE(sol4.result.converged);
+  EXPECT_GT(st4.interior_again_iterations, 0);
+  std::size_t i = 0;
+  while (i < st4.paths.size() && !st4.paths[i].other_iterate) ++i;
+  const std::size_t other_begin = i;
+  bool other_states = false, other_forces = false;
+  for (; i < st4.paths.size() && st4.paths[i].other_iterate; ++i) {
+    (st4.paths[i].iterate_states ? other_states : other_forces) = true;
+    EXPECT_EQ(st4.paths[i].residual, kNoSolution) << "path " << i;
+  }
+  EXPECT_TRUE(other_states && other_forces);
+  ASSERT_LT(i, st4.paths.size());  // then the continuation, without either flag
+  for (; i < st4.paths.size(); ++i) EXPECT_FALSE(st4.paths[i].other_iterate || st4.paths[i].iterate_states) << i;
+  EXPECT_EQ(st4.paths.back().compliance, CdPathSettings{}.compliant_start);
+  EXPECT_LE(st4.paths.back().residual, kExactStepTolerance);
+  long long pieces4 = 0;
+  for (const CdPathAttempt& at : st4.paths) pieces4 += at.pieces;
+  EXPECT_EQ(sol4.result.sweeps, pieces4);
+  // Without the second run: the same paths without the other iterate's, to the same solution.
+  CdPathStats st4_off;
+  const CdStepSolution off4 = probe_cd_path(p, 4, s, off, &st4_off);
+  for (const CdPathAttempt& at : st4_off.paths) EXPECT_FALSE(at.other_iterate);
+  const std::size_t others = static_cast<std::size_t>(
+      std::count_if(st4.paths.begin(), st4.paths.end(), [](const CdPathAttempt& at) { return at.other_iterate; }));
+  EXPECT_EQ(st4_off.paths.size(), st4.paths.size() - others);
+  // (here the second run's iterate is the start, so the paths without it are the other's)
+  EXPECT_TRUE(st4.interior_again_kept);
+  ASSERT_LT(other_begin, st4.paths.size());
+  EXPECT_EQ(st4_off.paths.front().pieces, st4.paths[other_begin].pieces);
+  EXPECT_EQ(off4.result.f_crit, sol4.result.f_crit);
+  EXPECT_EQ(other_begin, 5u);
   // Where plain Mehrotra ends near a solution there is no second run (contact 20: 7e-6).
   CdPathStats st20;
   probe_cd_path(p, 20, s, interior, &st20);

@@ -710,6 +710,12 @@ TEST_F(CliProbe, SaysWhenTheInteriorPointMethodRanAgainInTheWideNeighbourhood) {
   r = run_tool("probe " + q(p200) + " --contact 48 --method cd --cd-start interior --threads 1 --out " +
                q(root_ / "plain"));
   EXPECT_EQ(r.output.find("again in the wide neighbourhood"), std::string::npos) << r.output;
+  // contact 4: no path from the start's iterate is exact, and the other iterate's are listed
+  r = run_tool("probe " + q(p200) + " --contact 4 --method cd --cd-start interior --cd-interior-neighbourhood 1e-3 "
+               "--threads 1 --out " + q(root_ / "other"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path 6 from the other iterate's states at compliance 0.001"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("from the other iterate's forces' states"), std::string::npos) << r.output;
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

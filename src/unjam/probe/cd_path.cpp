@@ -824,8 +824,10 @@ constexpr double kScaledRestartTolerance = 0.01;
 namespace {
 
 // probe_cd_path on its step pb (build_cd_step) from ps.start alone.
+// other_iterate: the interior-point start from the iterate of its two runs that is not the
+// start by the residual rule (CdPathSettings::interior_neighbourhood), where it ran twice.
 CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings,
-                                const CdPathSettings& ps, CdPathStats* stats_out) {
+                                const CdPathSettings& ps, CdPathStats* stats_out, bool other_iterate = false) {
   if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
     throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
   CdStepGuess start_guess;  // the lp optimum or the interior-point iterate
@@ -872,7 +874,7 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
       InteriorPointResult again = interior_point_step(pb, is);
       interior_again = {again.iterations, again.short_steps, again.natural_residual,
                         again.natural_residual < interior.natural_residual};
-      if (interior_again.kept) interior = std::move(again);
+      if (interior_again.kept != other_iterate) interior = std::move(again);
     }
     start_guess = {interior.f, interior.q, interior.closed, interior.sliding};
     guess = &start_guess;
@@ -953,7 +955,7 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
           follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                       stats.failure, iterate_states});
+                       stats.failure, iterate_states, other_iterate});
       // restart_divisor below where this lowering stopped (or this path's start, where it failed),
       // never below the rigid compliance itself: a path there is the static start's.
       if (soft)
@@ -1002,10 +1004,11 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
 
 }  // namespace
 
-// The interior-point start is followed by the compliant continuation where its paths find no
-// exact solution (with friction the path from the iterate may close on itself; docs/probe.md,
-// "An interior-point start"), within what is left of the budget; the lower residual is kept
-// and every path is listed.
+// The interior-point start is followed, where its paths find no exact solution (with friction
+// the path from the iterate may close on itself; docs/probe.md, "An interior-point start"), by
+// the paths from its other iterate where it ran twice ("Keeping the iterates centred"), then by
+// the compliant continuation, each within what is left of the budget; the lowest residual is
+// kept and every path is listed.
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
@@ -1015,30 +1018,41 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     if (stats_out) *stats_out = std::move(first);
     return sol;
   }
-  CdPathSettings rest = ps;
-  rest.start = CdPathStart::compliant;
-  if (ps.max_probe_pieces > 0) rest.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - first.pieces_all);
-  CdPathStats second;
-  CdStepSolution alt = probe_from_start(packing, pb, settings, rest, &second);
   const auto residual = [](const CdStepSolution& s) { return s.f.size() > 0 ? s.residual.max() : kNoSolution; };
-  const bool take_alt = residual(alt) < residual(sol);
-  CdPathStats& kept = take_alt ? second : first;
+  CdPathStats kept = first;
+  std::vector<CdPathAttempt> paths = first.paths;
+  long long used = first.pieces_all;
+  bool spent = false;
+  for (const bool other : {true, false}) {  // the other iterate (where there is one), then the continuation
+    if (other && first.interior_again_iterations == 0) continue;
+    CdPathSettings rest = ps;
+    if (!other) rest.start = CdPathStart::compliant;
+    if (ps.max_probe_pieces > 0) rest.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - used);
+    CdPathStats next;
+    CdStepSolution alt = probe_from_start(packing, pb, settings, rest, &next, other);
+    paths.insert(paths.end(), next.paths.begin(), next.paths.end());
+    used += next.pieces_all;
+    spent = next.budget_spent;
+    if (residual(alt) < residual(sol)) {
+      sol = std::move(alt);
+      kept = std::move(next);
+    }
+    if (sol.result.converged || spent) break;
+  }
   CdPathStats merged = kept;
-  merged.paths = first.paths;
-  merged.paths.insert(merged.paths.end(), second.paths.begin(), second.paths.end());
+  merged.paths = std::move(paths);
   merged.attempts = static_cast<int>(merged.paths.size());
-  merged.pieces_all = first.pieces_all + second.pieces_all;
-  merged.budget_spent = second.budget_spent;
+  merged.pieces_all = used;
+  merged.budget_spent = spent;
   merged.interior_iterations = first.interior_iterations;
   merged.interior_residual = first.interior_residual;
   merged.interior_again_iterations = first.interior_again_iterations;
   merged.interior_again_short_steps = first.interior_again_short_steps;
   merged.interior_again_residual = first.interior_again_residual;
   merged.interior_again_kept = first.interior_again_kept;
-  CdStepSolution out = take_alt ? std::move(alt) : std::move(sol);
-  out.result.sweeps = merged.pieces_all;
+  sol.result.sweeps = merged.pieces_all;
   if (stats_out) *stats_out = std::move(merged);
-  return out;
+  return sol;
 }
 
 }  // namespace unjam

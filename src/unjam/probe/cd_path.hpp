@@ -77,9 +77,10 @@ struct CdPathSettings {
   // at 10 times the last, before the paths from the forces' states. Where the interior-point
   // method (plain Mehrotra) ends at a natural residual above interior_again_above, it runs again
   // in the wide neighbourhood interior_neighbourhood (InteriorPointSettings::neighbourhood), and
-  // the iterate with the lower natural residual is the start (0, the default: no second run;
-  // it helps at 8000 disks and costs pieces at 500 disks, mu = 1; docs/probe.md, "Keeping the
-  // iterates centred").
+  // the iterate with the lower natural residual is the start; where no path from it is exact,
+  // the paths from the other iterate follow, before the compliant continuation (0, the default:
+  // no second run; it helps at 1000-8000 disks and costs 1.5 times the pieces at 500 disks, mu = 1;
+  // docs/probe.md, "Keeping the iterates centred").
   double interior_compliance = 1e-3;
   double interior_rigid = 1e-5;
   double interior_states_pieces = 0.1;
@@ -133,6 +134,8 @@ struct CdPathAttempt {
   int lowerings = 0;
   std::string failure;          // as CdPathStats::failure ("" where it reached its end)
   bool iterate_states = false;  // interior: started from the iterate's own states (else from its forces')
+  bool other_iterate = false;   // interior: from the interior-point method's other iterate (of its two runs,
+                                // the one with the higher natural residual; CdPathSettings::interior_neighbourhood)
 };
 
 struct CdPathStats {
