@@ -645,7 +645,7 @@ void add_probe_command(CLI::App& app) {
   cmd->add_option("--cd-interior-neighbourhood", o->cd.interior_neighbourhood,
                   "cd, interior start: where the interior-point method ends at a natural residual above 1e-3, run "
                   "it again with every pair's z w kept above this fraction of their mean, and start from the "
-                  "iterate with the lower residual (0: no second run; e.g. 1e-3; in [0, 1); "
+                  "iterate with the lower residual, then from the other (0: no second run; e.g. 1e-3; in [0, 1); "
                   "docs/probe.md, \"Keeping the iterates centred\")")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
