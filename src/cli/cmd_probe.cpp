@@ -188,10 +188,10 @@ void print_cd_paths(const CdPathStats& stats) {
                 stats.interior_again_kept ? "its iterate is the start" : "the first iterate is the start");
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
-    std::printf("  path %zu %s%sat compliance %.3g: ", i + 1, a.other_iterate ? "from the other iterate" : "",
-                a.iterate_states ? (a.other_iterate ? "'s states " : "from the interior point's states ")
-                                 : (a.other_iterate ? "'s forces' states " : ""),
-                a.compliance);
+    const char* from = a.other_iterate ? (a.iterate_states ? "from the other iterate's states "
+                                                           : "from the other iterate's forces' states ")
+                                       : (a.iterate_states ? "from the interior point's states " : "");
+    std::printf("  path %zu %sat compliance %.3g: ", i + 1, from, a.compliance);
     if (a.lambda_max < 1.0)
       std::printf("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.c_str());
     else if (a.compliance_end > 0.0)

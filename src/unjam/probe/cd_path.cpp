@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -823,11 +824,67 @@ constexpr double kScaledRestartTolerance = 0.01;
 
 namespace {
 
-// probe_cd_path on its step pb (build_cd_step) from ps.start alone.
-// other_iterate: the interior-point start from the iterate of its two runs that is not the
-// start by the residual rule (CdPathSettings::interior_neighbourhood), where it ran twice.
+// The interior-point method's iterates for CdPathStart::interior_point (docs/probe.md, "An
+// interior-point start", "Keeping the iterates centred"): plain Mehrotra's and, where it ends
+// above interior_again_above with interior_neighbourhood on, the second run's in the wide
+// neighbourhood. `start` is the one with the lower natural residual, `other` the one left.
+struct InteriorIterates {
+  InteriorPointResult start;
+  std::optional<InteriorPointResult> other;
+  bool again_kept = false;  // the second run's iterate is the start
+  const InteriorPointResult& plain() const { return other && again_kept ? *other : start; }
+  const InteriorPointResult* again() const { return !other ? nullptr : again_kept ? &start : &*other; }
+};
+
+InteriorIterates interior_iterates(const CdStepProblem& pb, const CdPathSettings& ps) {
+  if (!(ps.interior_compliance > 0.0) || !(ps.interior_rigid > 0.0) || ps.interior_rigid > ps.interior_compliance)
+    throw Error("cd path: interior_compliance and interior_rigid must be > 0, interior_rigid <= interior_compliance (got " +
+                std::to_string(ps.interior_compliance) + ", " + std::to_string(ps.interior_rigid) + ")");
+  if (ps.interior_path_pieces < 1)
+    throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
+  if (!(ps.interior_states_pieces >= 0.0) || !std::isfinite(ps.interior_states_pieces))
+    throw Error("cd path: interior_states_pieces must be >= 0 (got " + std::to_string(ps.interior_states_pieces) + ")");
+  if (ps.interior_states_retries < 0)
+    throw Error("cd path: interior_states_retries must be >= 0 (got " + std::to_string(ps.interior_states_retries) + ")");
+  if (ps.interior_states_stall < 0)
+    throw Error("cd path: interior_states_stall must be >= 0 (got " + std::to_string(ps.interior_states_stall) + ")");
+  if (!(ps.interior_neighbourhood >= 0.0 && ps.interior_neighbourhood < 1.0))
+    throw Error("cd path: interior_neighbourhood must be in [0, 1) (got " + std::to_string(ps.interior_neighbourhood) + ")");
+  if (!(ps.interior_again_above >= 0.0))
+    throw Error("cd path: interior_again_above must be >= 0 (got " + std::to_string(ps.interior_again_above) + ")");
+  InteriorPointSettings is;
+  is.velocity_scale = pb.g / (pb.dt * pb.dt);
+  is.max_iterations = ps.interior_max_iterations;
+  InteriorIterates it{interior_point_step(pb, is), std::nullopt, false};
+  // Plain Mehrotra may drive a few pairs to the boundary ahead of the others and stall far
+  // from a solution; the wide neighbourhood prevents that, but on other probes it ends
+  // further away than plain Mehrotra does.
+  if (ps.interior_neighbourhood > 0.0 && it.start.natural_residual > ps.interior_again_above) {
+    is.neighbourhood = ps.interior_neighbourhood;
+    it.other = interior_point_step(pb, is);
+    it.again_kept = it.other->natural_residual < it.start.natural_residual;
+    if (it.again_kept) std::swap(it.start, *it.other);
+  }
+  return it;
+}
+
+// The interior-point method's runs, as CdPathStats reports them.
+void record_interior(const InteriorIterates& it, CdPathStats& stats) {
+  stats.interior_iterations = it.plain().iterations;
+  stats.interior_residual = it.plain().natural_residual;
+  if (const InteriorPointResult* again = it.again()) {
+    stats.interior_again_iterations = again->iterations;
+    stats.interior_again_short_steps = again->short_steps;
+    stats.interior_again_residual = again->natural_residual;
+    stats.interior_again_kept = it.again_kept;
+  }
+}
+
+// probe_cd_path on its step pb (build_cd_step) from ps.start alone; for the interior-point
+// start, from `iterate` (of interior_iterates: other_iterate where it is not the start).
 CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings,
-                                const CdPathSettings& ps, CdPathStats* stats_out, bool other_iterate = false) {
+                                const CdPathSettings& ps, CdPathStats* stats_out,
+                                const InteriorPointResult* iterate = nullptr, bool other_iterate = false) {
   if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
     throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
   CdStepGuess start_guess;  // the lp optimum or the interior-point iterate
@@ -836,47 +893,9 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     start_guess = lp_optimum_guess(packing, pb, settings);
     guess = &start_guess;
   }
-  InteriorPointResult interior;
-  int plain_iterations = 0;  // the interior-point method's first run (plain Mehrotra)
-  double plain_residual = 0.0;
-  struct {
-    int iterations = 0, short_steps = 0;
-    double residual = 0.0;
-    bool kept = false;
-  } interior_again;  // its second run in the wide neighbourhood, where there is one
   if (ps.start == CdPathStart::interior_point) {
-    if (!(ps.interior_compliance > 0.0) || !(ps.interior_rigid > 0.0) || ps.interior_rigid > ps.interior_compliance)
-      throw Error("cd path: interior_compliance and interior_rigid must be > 0, interior_rigid <= interior_compliance (got " +
-                  std::to_string(ps.interior_compliance) + ", " + std::to_string(ps.interior_rigid) + ")");
-    if (ps.interior_path_pieces < 1)
-      throw Error("cd path: interior_path_pieces must be >= 1 (got " + std::to_string(ps.interior_path_pieces) + ")");
-    if (!(ps.interior_states_pieces >= 0.0) || !std::isfinite(ps.interior_states_pieces))
-      throw Error("cd path: interior_states_pieces must be >= 0 (got " + std::to_string(ps.interior_states_pieces) + ")");
-    if (ps.interior_states_retries < 0)
-      throw Error("cd path: interior_states_retries must be >= 0 (got " + std::to_string(ps.interior_states_retries) + ")");
-    if (ps.interior_states_stall < 0)
-      throw Error("cd path: interior_states_stall must be >= 0 (got " + std::to_string(ps.interior_states_stall) + ")");
-    if (!(ps.interior_neighbourhood >= 0.0 && ps.interior_neighbourhood < 1.0))
-      throw Error("cd path: interior_neighbourhood must be in [0, 1) (got " + std::to_string(ps.interior_neighbourhood) + ")");
-    if (!(ps.interior_again_above >= 0.0))
-      throw Error("cd path: interior_again_above must be >= 0 (got " + std::to_string(ps.interior_again_above) + ")");
-    InteriorPointSettings is;
-    is.velocity_scale = pb.g / (pb.dt * pb.dt);
-    is.max_iterations = ps.interior_max_iterations;
-    interior = interior_point_step(pb, is);
-    plain_iterations = interior.iterations;
-    plain_residual = interior.natural_residual;
-    // Plain Mehrotra may drive a few pairs to the boundary ahead of the others and stall far
-    // from a solution; the wide neighbourhood prevents that, but on other probes it ends
-    // further away than plain Mehrotra does (docs/probe.md, "Keeping the iterates centred").
-    if (ps.interior_neighbourhood > 0.0 && interior.natural_residual > ps.interior_again_above) {
-      is.neighbourhood = ps.interior_neighbourhood;
-      InteriorPointResult again = interior_point_step(pb, is);
-      interior_again = {again.iterations, again.short_steps, again.natural_residual,
-                        again.natural_residual < interior.natural_residual};
-      if (interior_again.kept != other_iterate) interior = std::move(again);
-    }
-    start_guess = {interior.f, interior.q, interior.closed, interior.sliding};
+    if (!iterate) throw Error("cd path: the interior-point start needs its iterate");
+    start_guess = {iterate->f, iterate->q, iterate->closed, iterate->sliding};
     guess = &start_guess;
   }
   // The compliance trades the conditioning of the sticking set's system against its own
@@ -978,12 +997,6 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     }
   }
   best_stats.pieces_all = budget.used;
-  best_stats.interior_iterations = plain_iterations;
-  best_stats.interior_residual = plain_residual;
-  best_stats.interior_again_iterations = interior_again.iterations;
-  best_stats.interior_again_short_steps = interior_again.short_steps;
-  best_stats.interior_again_residual = interior_again.residual;
-  best_stats.interior_again_kept = interior_again.kept;
   best_stats.budget_spent = budget.spent();
   // The budget stopped the probe short of an exact solution: that is why it has none.
   if (best_stats.budget_spent && !exact()) best_stats.failure = "budget";
@@ -1012,46 +1025,42 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
-  CdPathStats first;
-  CdStepSolution sol = probe_from_start(packing, pb, settings, ps, &first);
-  if (ps.start != CdPathStart::interior_point || sol.result.converged || first.budget_spent) {
-    if (stats_out) *stats_out = std::move(first);
-    return sol;
+  std::optional<InteriorIterates> iterates;
+  if (ps.start == CdPathStart::interior_point) iterates = interior_iterates(pb, ps);
+  CdPathStats kept;
+  CdStepSolution sol = probe_from_start(packing, pb, settings, ps, &kept, iterates ? &iterates->start : nullptr);
+  std::vector<CdPathAttempt> paths = kept.paths;
+  long long used = kept.pieces_all;
+  bool spent = kept.budget_spent;
+  if (iterates) {
+    const auto residual = [](const CdStepSolution& x) { return x.f.size() > 0 ? x.residual.max() : kNoSolution; };
+    // Where not exact yet: the paths from `iterate` (or the compliant continuation), within
+    // what is left of the budget; the lower residual is kept.
+    const auto follow_on = [&](CdPathSettings at, const InteriorPointResult* iterate) {
+      if (sol.result.converged || spent) return;
+      if (ps.max_probe_pieces > 0) at.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - used);
+      CdPathStats next;
+      CdStepSolution alt = probe_from_start(packing, pb, settings, at, &next, iterate, iterate != nullptr);
+      paths.insert(paths.end(), next.paths.begin(), next.paths.end());
+      used += next.pieces_all;
+      spent = next.budget_spent;
+      if (residual(alt) < residual(sol)) {
+        sol = std::move(alt);
+        kept = std::move(next);
+      }
+    };
+    if (iterates->other) follow_on(ps, &*iterates->other);
+    CdPathSettings compliant = ps;
+    compliant.start = CdPathStart::compliant;
+    follow_on(compliant, nullptr);
+    kept.paths = std::move(paths);
+    kept.attempts = static_cast<int>(kept.paths.size());
+    kept.pieces_all = used;
+    kept.budget_spent = spent;
+    record_interior(*iterates, kept);
+    sol.result.sweeps = kept.pieces_all;
   }
-  const auto residual = [](const CdStepSolution& s) { return s.f.size() > 0 ? s.residual.max() : kNoSolution; };
-  CdPathStats kept = first;
-  std::vector<CdPathAttempt> paths = first.paths;
-  long long used = first.pieces_all;
-  bool spent = false;
-  for (const bool other : {true, false}) {  // the other iterate (where there is one), then the continuation
-    if (other && first.interior_again_iterations == 0) continue;
-    CdPathSettings rest = ps;
-    if (!other) rest.start = CdPathStart::compliant;
-    if (ps.max_probe_pieces > 0) rest.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - used);
-    CdPathStats next;
-    CdStepSolution alt = probe_from_start(packing, pb, settings, rest, &next, other);
-    paths.insert(paths.end(), next.paths.begin(), next.paths.end());
-    used += next.pieces_all;
-    spent = next.budget_spent;
-    if (residual(alt) < residual(sol)) {
-      sol = std::move(alt);
-      kept = std::move(next);
-    }
-    if (sol.result.converged || spent) break;
-  }
-  CdPathStats merged = kept;
-  merged.paths = std::move(paths);
-  merged.attempts = static_cast<int>(merged.paths.size());
-  merged.pieces_all = used;
-  merged.budget_spent = spent;
-  merged.interior_iterations = first.interior_iterations;
-  merged.interior_residual = first.interior_residual;
-  merged.interior_again_iterations = first.interior_again_iterations;
-  merged.interior_again_short_steps = first.interior_again_short_steps;
-  merged.interior_again_residual = first.interior_again_residual;
-  merged.interior_again_kept = first.interior_again_kept;
-  sol.result.sweeps = merged.pieces_all;
-  if (stats_out) *stats_out = std::move(merged);
+  if (stats_out) *stats_out = std::move(kept);
   return sol;
 }
 
