@@ -392,6 +392,46 @@ TEST(CdPath, SofterStartsSolveWhereTheFirstStartsContinuationFindsNone) {
   }
 }
 
+TEST(CdPath, TheContinuationStartsAtTheGivenCompliance) {
+  // p200-mu1, contact 14 (dt = 1e-3): from the default compliance 0.1 the lowering stops at
+  // ~0.012 and a restart at a tenth of that is exact (the test below). Started at 1e-3
+  // (CdPathSettings::compliant_start, `--cd-compliant-start`), below that fold, the first path
+  // is lowered to the rigid step at once, to the same F_crit in fewer pieces (docs/probe.md,
+  // "Where the continuation starts").
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings from_default;
+  from_default.start = CdPathStart::compliant;
+  ASSERT_EQ(from_default.compliant_start, 0.1);
+  CdPathSettings below = from_default;
+  below.compliant_start = 1e-3;
+  CdPathStats a, b;
+  const CdStepSolution sa = probe_cd_path(p, 14, ProbeSettings{}, from_default, &a);
+  const CdStepSolution sb = probe_cd_path(p, 14, ProbeSettings{}, below, &b);
+  ASSERT_LE(sa.residual.max(), kExactStepTolerance);
+  ASSERT_LE(sb.residual.max(), kExactStepTolerance);
+  ASSERT_EQ(a.paths.size(), 2u);
+  EXPECT_EQ(a.paths[0].compliance, 0.1);
+  ASSERT_EQ(b.paths.size(), 1u);  // no restart
+  EXPECT_EQ(b.paths[0].compliance, 1e-3);
+  EXPECT_EQ(b.paths[0].compliance_end, 0.0);
+  EXPECT_EQ(b.restarts, 0);
+  EXPECT_LT(b.pieces_all, a.pieces_all);
+  EXPECT_NEAR(sb.result.f_crit / sa.result.f_crit, 1.0, 1e-9);
+  // The interior-point start's continuation starts there too (contact 4, quasi-static: the two
+  // paths from the iterate's forces are not exact): its first path is at compliant_start.
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  interior.compliant_start = 2e-3;
+  interior.interior_states_pieces = 0.0;  // only the paths from the iterate's forces, then the continuation
+  CdPathStats c;
+  const CdStepSolution sc = probe_cd_path(p, 4, quasi_static_step(), interior, &c);
+  ASSERT_EQ(c.paths.size(), 3u);
+  EXPECT_FALSE(c.paths[0].iterate_states);
+  EXPECT_GT(c.paths[1].residual, kExactStepTolerance);
+  EXPECT_EQ(c.paths[2].compliance, 2e-3);
+  EXPECT_LE(sc.residual.max(), kExactStepTolerance);
+}
+
 TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   // p200-mu1, contact 14: lowered from compliance 0.1, the soft solution's branch turns back
   // in the compliance at ~0.012 (the proximal paths there close on themselves) and the

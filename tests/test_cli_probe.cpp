@@ -718,6 +718,37 @@ TEST_F(CliProbe, SaysWhenTheInteriorPointMethodRanAgainInTheWideNeighbourhood) {
   EXPECT_NE(r.output.find("from the other iterate's forces' states"), std::string::npos) << r.output;
 }
 
+TEST_F(CliProbe, TheContinuationStartsWhereTheUserSaysAndTheCampaignRecordsIt) {
+  // Contact 14 of p200-mu1 (dt = 1e-3): from the default compliance 0.1 the lowering stops at
+  // 0.012 and the restart below is exact; with --cd-compliant-start 1e-3 the first path is
+  // exact (docs/probe.md, "Where the continuation starts"). A campaign records the setting where
+  // it is not the default, and its checkpoint does not resume with another one.
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  const std::string one = "probe " + q(p200) + " --contact 14 --dt 1e-3 --method cd --cd-start compliant --threads 1 ";
+  testing::ToolRun r = run_tool(one + "--cd-compliant-start 1e-3 --out " + q(root_ / "low"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 0.001: full opening; lowered to the rigid step"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("path 2"), std::string::npos) << r.output;
+  r = run_tool(one + "--out " + q(root_ / "default"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path 1 at compliance 0.1: full opening; 8 lowerings, stopped at compliance 0.012"),
+            std::string::npos) << r.output;
+  const std::string campaign = "probe " + q(dir_) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
+  const fs::path recorded = root_ / "recorded", unrecorded = root_ / "unrecorded";
+  r = run_tool(campaign + "--cd-compliant-start 1e-4 --stop-after 1 --out " + q(recorded));
+  ASSERT_EQ(r.exit_code, 3) << r.output;  // stopped after one probe
+  r = run_tool(campaign + "--out " + q(recorded));
+  EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint's setting differs
+  EXPECT_NE(r.output.find("cd_compliant_start"), std::string::npos) << r.output;
+  r = run_tool(campaign + "--cd-compliant-start 1e-4 --out " + q(recorded));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json_file(recorded / "probe_summary.json")["settings"]["cd_compliant_start"], 1e-4);
+  r = run_tool(campaign + "--out " + q(unrecorded));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_compliant_start"));
+}
+
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
   // Contact 73 of the frozen 100-disk structure at mu = 1, quasi-static, one starting
   // compliance: the lowering from 0.1 stops at a fold at 0.012 and no restart is exact. The

@@ -155,7 +155,8 @@ def signature_defaults(function):
                             "cd-interior-states-stall": "cd_interior_states_stall",
                             "cd-interior-states-retries": "cd_interior_states_retries",
                             "cd-interior-iterations": "cd_interior_iterations",
-                            "cd-interior-neighbourhood": "cd_interior_neighbourhood"}),
+                            "cd-interior-neighbourhood": "cd_interior_neighbourhood",
+                            "cd-compliant-start": "cd_compliant_start"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -282,6 +283,27 @@ def test_the_interior_start_takes_its_neighbourhood_as_the_tool(tmp_path):
         assert r.converged and r.sweeps == pieces, (value, r.sweeps)
         assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
         assert abs(r.f_crit / (1.382824 * p.F0) - 1.0) < 1e-6
+
+
+def test_the_continuation_takes_its_first_compliance_as_the_tool(tmp_path):
+    # cd_compliant_start as `unjam probe --cd-compliant-start`: on contact 14 of p200-mu1 (dt =
+    # 1e-3) the continuation from 0.1 stops at a fold and its restart is exact in 403 pieces in
+    # all; started at 1e-3 its first path is exact in 199 (docs/probe.md, "Where the continuation
+    # starts"). Refused for the static start and for a value <= 0.
+    fixture = str(Path(__file__).parent / "fixtures" / "p200-mu1")
+    p = unjam.read_packing(fixture)
+    for value, pieces in [(1e-3, 199), (0.1, 403)]:
+        out = tmp_path / str(value)
+        tool("probe", fixture, "--contact", 14, "--dt", 1e-3, "--method", "cd", "--cd-start", "compliant",
+             "--cd-compliant-start", value, "--threads", 1, "--out", out, "--quiet")
+        rows = read_csv(out / "probe-14.csv")
+        r = unjam.probe(p, contact=14, method="cd", dt=1e-3, cd_start="compliant", cd_compliant_start=value)
+        assert r.converged and r.sweeps == pieces, (value, r.sweeps)
+        assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
+    with pytest.raises(unjam.Error, match="applies to the cd method's compliant and interior starts only"):
+        unjam.probe(p, contact=14, method="cd", cd_compliant_start=1e-3)
+    with pytest.raises(unjam.Error, match="--cd-compliant-start must be positive"):
+        unjam.probe(p, contact=14, method="cd", cd_start="compliant", cd_compliant_start=0.0)
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -619,6 +619,13 @@ void add_probe_command(CLI::App& app) {
       "starts\")")
       ->capture_default_str()
       ->check(non_negative_number());
+  cmd->add_option("--cd-compliant-start", o->cd.compliant_start,
+                  "cd, compliant and interior starts: the compliance (a fraction of g / (dt^2 F0)) at which the "
+                  "compliant continuation's first path is followed from the static network before it is lowered to "
+                  "the rigid step; lower is closer to the static branch and, at 1000 disks with mu = 1, solves more "
+                  "probes (docs/probe.md, \"Where the continuation starts\")")
+      ->capture_default_str()
+      ->check(positive_number());
   cmd->add_option("--cd-interior-states-pieces", o->cd.interior_states_pieces,
                   "cd, interior start: the first path starts from the interior-point iterate's own states and is cut "
                   "after this many pieces per contact of the step (0: no such path, only the paths from the states of "

@@ -96,8 +96,9 @@ struct CdPathSettings {
   int max_updated_rows = 48;  // rows of S changed before it is factorised afresh (0: every piece)
   bool retry = true;          // where not exact: again at 10 x and 0.1 x the compliance
                               // (compliant: restarted below where the lowering stopped)
-  // CdPathStart::compliant: the path's compliance, then its factor per proximal step down
-  // to `compliance`; where the lowering stops at a compliance c (the solution it follows
+  // CdPathStart::compliant (and the continuation that follows the interior-point start): the
+  // first path's compliance (`--cd-compliant-start`; at or below `compliance` the continuation
+  // is the static start's paths), then its factor per proximal step down to `compliance`; where the lowering stops at a compliance c (the solution it follows
   // ends there), the path is followed afresh from the static network at c / restart_divisor,
   // up to max_restarts times (docs/probe.md, "Where the path starts").
   // A lowering whose proximal path fails is retried from the latest solution with the

@@ -217,6 +217,12 @@ void validate(const CampaignSettings& s) {
   if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
       !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
     throw Error("--cd-softer-starts applies to the cd method's compliant start only");
+  if (!(s.cd.compliant_start > 0.0 && std::isfinite(s.cd.compliant_start)))
+    throw Error("--cd-compliant-start must be positive and finite (got " + std::to_string(s.cd.compliant_start) + ")");
+  if (s.cd.compliant_start != CdPathSettings{}.compliant_start &&
+      !(s.method == ProbeMethod::kCd &&
+        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point)))
+    throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces < 0)
     throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
@@ -434,6 +440,12 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd &&
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
+    // The continuation's first compliance: recorded where it is not the default, the value of
+    // the checkpoints made before it was a setting, so that those still resume.
+    if (s.method == ProbeMethod::kCd &&
+        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) &&
+        s.cd.compliant_start != CdPathSettings{}.compliant_start)
+      j["cd_compliant_start"] = s.cd.compliant_start;
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
       // The first path from the iterate's own states (docs/probe.md, "The iterate's own
       // states"), its cut where it stops gaining ground and its retries at softer compliances:
