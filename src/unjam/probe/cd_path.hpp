@@ -98,9 +98,10 @@ struct CdPathSettings {
                               // (compliant: restarted below where the lowering stopped)
   // CdPathStart::compliant (and the continuation that follows the interior-point start): the
   // first path's compliance (`--cd-compliant-start`; at or below `compliance` the continuation
-  // is the static start's paths), then its factor per proximal step down to `compliance`; where the lowering stops at a compliance c (the solution it follows
-  // ends there), the path is followed afresh from the static network at c / restart_divisor,
-  // up to max_restarts times (docs/probe.md, "Where the path starts").
+  // is the static start's paths; docs/probe.md, "Where the continuation starts"), then its
+  // factor per proximal step down to `compliance`; where the lowering stops at a compliance c
+  // (the solution it follows ends there), the path is followed afresh from the static network
+  // at c / restart_divisor, up to max_restarts times (docs/probe.md, "Where the path starts").
   // A lowering whose proximal path fails is retried from the latest solution with the
   // factor's square root, up to lowering_retries times in a row, before the restart.
   double compliant_start = 0.1;

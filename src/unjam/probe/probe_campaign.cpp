@@ -412,6 +412,9 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
 // The interior-point method's cap on its iterations before it was a setting
 // (CdPathSettings::interior_max_iterations): the one cap the settings leave unrecorded.
 constexpr int kUnrecordedInteriorIterations = 40;
+// The compliant continuation's first compliance before it was a setting
+// (CdPathSettings::compliant_start): the one value the settings leave unrecorded.
+constexpr double kUnrecordedCompliantStart = 0.1;
 
 nlohmann::json to_json(const CampaignSettings& s) {
   const bool lp = s.method == ProbeMethod::kLp;
@@ -440,11 +443,11 @@ nlohmann::json to_json(const CampaignSettings& s) {
     if (s.method == ProbeMethod::kCd &&
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
       j["cd_softer_starts"] = s.cd.softer_starts;
-    // The continuation's first compliance: recorded where it is not the default, the value of
-    // the checkpoints made before it was a setting, so that those still resume.
+    // The continuation's first compliance: recorded where it is not the value of the
+    // checkpoints made before it was a setting, so that those still resume.
     if (s.method == ProbeMethod::kCd &&
         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) &&
-        s.cd.compliant_start != CdPathSettings{}.compliant_start)
+        s.cd.compliant_start != kUnrecordedCompliantStart)
       j["cd_compliant_start"] = s.cd.compliant_start;
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
       // The first path from the iterate's own states (docs/probe.md, "The iterate's own
