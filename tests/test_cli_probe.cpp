@@ -766,6 +766,15 @@ TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
   EXPECT_NE(r.output.find("path 1 at compliance 0.1: full opening; 8 lowerings, stopped at compliance 0.012"),
             std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("--cd-start compliant takes"), std::string::npos) << r.output;  // it is the start
+  EXPECT_NE(r.output.find("--cd-compliant-start below 0.012 starts the continuation past that fold"),
+            std::string::npos) << r.output;
+  // and so it does: from 1e-3 the first path is lowered to an exact step
+  const testing::ToolRun low = run_tool("probe " + q(frozen) + " --contact 73 --method cd --cd-start compliant "
+                                        "--cd-softer-starts 0 --cd-compliant-start 1e-3 --threads 1 --out " +
+                                        q(root_ / "past-the-fold"));
+  EXPECT_EQ(low.exit_code, 0) << low.output;
+  EXPECT_NE(low.output.find("path 1 at compliance 0.001: full opening; lowered to the rigid step"), std::string::npos)
+      << low.output;
 }
 
 TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {

@@ -152,7 +152,9 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
       std::snprintf(buf, sizeof buf, "%.3g", stopped);
       return std::string("the compliance's lowering stopped at ") + buf +
              " (the branch of soft solutions turns back there), and the other paths listed below found no "
-             "exact solution; docs/probe.md, \"Where the path starts\"";
+             "exact solution; --cd-compliant-start below " + buf +
+             " starts the continuation past that fold; docs/probe.md, \"Where the path starts\", \"Where the "
+             "continuation starts\"";
     }
   }
   if (stats.failure == "loop" && stats.lambda_max < 1.0) {
