@@ -1029,10 +1029,10 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
   if (ps.start == CdPathStart::interior_point) iterates = interior_iterates(pb, ps);
   CdPathStats kept;
   CdStepSolution sol = probe_from_start(packing, pb, settings, ps, &kept, iterates ? &iterates->start : nullptr);
-  std::vector<CdPathAttempt> paths = kept.paths;
-  long long used = kept.pieces_all;
-  bool spent = kept.budget_spent;
   if (iterates) {
+    std::vector<CdPathAttempt> paths = kept.paths;
+    long long used = kept.pieces_all;
+    bool spent = kept.budget_spent;
     const auto residual = [](const CdStepSolution& x) { return x.f.size() > 0 ? x.residual.max() : kNoSolution; };
     // Where not exact yet: the paths from `iterate` (or the compliant continuation), within
     // what is left of the budget; the lower residual is kept.

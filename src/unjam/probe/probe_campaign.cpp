@@ -135,6 +135,13 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
   return [a, b] { return a() || b(); };
 }
 
+// The cd method with a compliant continuation: the compliant start, or the interior-point
+// start, which falls back to it (docs/probe.md, "An interior-point start").
+bool has_continuation(const CampaignSettings& s) {
+  return s.method == ProbeMethod::kCd &&
+         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point);
+}
+
 }  // namespace
 
 CampaignSettings with_running(const CampaignSettings& s, int k,
@@ -219,9 +226,7 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-softer-starts applies to the cd method's compliant start only");
   if (!(s.cd.compliant_start > 0.0 && std::isfinite(s.cd.compliant_start)))
     throw Error("--cd-compliant-start must be positive and finite (got " + std::to_string(s.cd.compliant_start) + ")");
-  if (s.cd.compliant_start != CdPathSettings{}.compliant_start &&
-      !(s.method == ProbeMethod::kCd &&
-        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point)))
+  if (s.cd.compliant_start != CdPathSettings{}.compliant_start && !has_continuation(s))
     throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces < 0)
     throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
@@ -440,14 +445,10 @@ nlohmann::json to_json(const CampaignSettings& s) {
       j["cd_start"] = cd_start_name(s.cd.start);
     // Recorded where they apply and are on (0 is the continuation's single start; the
     // interior-point start falls back to the continuation).
-    if (s.method == ProbeMethod::kCd &&
-        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) && s.cd.softer_starts > 0)
-      j["cd_softer_starts"] = s.cd.softer_starts;
+    if (has_continuation(s) && s.cd.softer_starts > 0) j["cd_softer_starts"] = s.cd.softer_starts;
     // The continuation's first compliance: recorded where it is not the value of the
     // checkpoints made before it was a setting, so that those still resume.
-    if (s.method == ProbeMethod::kCd &&
-        (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point) &&
-        s.cd.compliant_start != kUnrecordedCompliantStart)
+    if (has_continuation(s) && s.cd.compliant_start != kUnrecordedCompliantStart)
       j["cd_compliant_start"] = s.cd.compliant_start;
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
       // The first path from the iterate's own states (docs/probe.md, "The iterate's own
