@@ -432,6 +432,51 @@ TEST(CdPath, TheContinuationStartsAtTheGivenCompliance) {
   EXPECT_LE(sc.residual.max(), kExactStepTolerance);
 }
 
+TEST(CdPath, StopsAtANearExactSolutionWithinTheAcceptedResidual) {
+  // p200-mu1, contact 8, compliant start at the quasi-static step: the first path's lowering
+  // stops at a compliance of ~1.3e-4 with a near-exact solution (1.04e-5 g), and the restart
+  // below it is exact. With CdPathSettings::accept_residual (`--cd-accept-residual`) at 1e-4 the
+  // search ends at the near-exact solution, in the first path's pieces; at 1e-5, below its
+  // residual, it goes on to the exact one as by default (docs/probe.md, "Accepting a near-exact
+  // solution").
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings exact_only;
+  exact_only.start = CdPathStart::compliant;
+  ASSERT_EQ(exact_only.accept_residual, kExactStepTolerance);
+  CdPathStats a, b, c;
+  const CdStepSolution sa = probe_cd_path(p, 8, quasi_static_step(), exact_only, &a);
+  ASSERT_EQ(a.paths.size(), 2u);
+  ASSERT_GT(a.paths[0].residual, 1e-5);
+  ASSERT_LT(a.paths[0].residual, 1e-4);
+  EXPECT_TRUE(sa.result.converged);
+  EXPECT_FALSE(a.accepted);
+  CdPathSettings accept = exact_only;
+  accept.accept_residual = 1e-4;
+  const CdStepSolution sb = probe_cd_path(p, 8, quasi_static_step(), accept, &b);
+  ASSERT_EQ(b.paths.size(), 1u);
+  EXPECT_TRUE(b.accepted);
+  EXPECT_FALSE(sb.result.converged);
+  EXPECT_EQ(sb.residual.max(), a.paths[0].residual);
+  EXPECT_EQ(b.pieces_all, a.paths[0].pieces);
+  EXPECT_LT(b.pieces_all, a.pieces_all);
+  // The near-exact solution is the compliance's limit where the lowering stopped, not the
+  // rigid step's: its F_crit is ~1 % above the exact one.
+  EXPECT_GT(sb.result.f_crit, sa.result.f_crit);
+  EXPECT_LT(sb.result.f_crit, 1.02 * sa.result.f_crit);
+  CdPathSettings below = exact_only;
+  below.accept_residual = 1e-5;
+  const CdStepSolution sc = probe_cd_path(p, 8, quasi_static_step(), below, &c);
+  EXPECT_FALSE(c.accepted);
+  EXPECT_EQ(c.pieces_all, a.pieces_all);
+  EXPECT_EQ(sc.result.f_crit, sa.result.f_crit);
+  // Outside [kExactStepTolerance, kMaxPathResidual] it is refused.
+  for (double bad : {0.0, 0.5 * kExactStepTolerance, 2.0 * kMaxPathResidual, std::nan("")}) {
+    CdPathSettings wrong = exact_only;
+    wrong.accept_residual = bad;
+    EXPECT_THROW(probe_cd_path(p, 8, quasi_static_step(), wrong), Error) << bad;
+  }
+}
+
 TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   // p200-mu1, contact 14: lowered from compliance 0.1, the soft solution's branch turns back
   // in the compliance at ~0.012 (the proximal paths there close on themselves) and the

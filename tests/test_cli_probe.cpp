@@ -749,6 +749,39 @@ TEST_F(CliProbe, TheContinuationStartsWhereTheUserSaysAndTheCampaignRecordsIt) {
   EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_compliant_start"));
 }
 
+TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRecordsIt) {
+  // Contact 8 of p200-mu1 (quasi-static, compliant start): the first path ends near-exact at
+  // 1.04e-5 g and the restart below it is exact. With --cd-accept-residual 1e-4 the probe stops
+  // at the near-exact solution, says so and exits 0: a result the user asked for, not an error
+  // (docs/probe.md, "Accepting a near-exact solution"). A campaign records the setting, and its
+  // checkpoint does not resume without it.
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  const std::string one = "probe " + q(p200) + " --contact 8 --method cd --cd-start compliant --threads 1 ";
+  testing::ToolRun r = run_tool(one + "--cd-accept-residual 1e-4 --out " + q(root_ / "accepted"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("converged NO"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("near-exact: the search stopped at the first solution within --cd-accept-residual 0.0001 g"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("path 2"), std::string::npos) << r.output;
+  r = run_tool(one + "--out " + q(root_ / "exact"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("converged yes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("path 2"), std::string::npos) << r.output;
+  const std::string campaign = "probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
+  const fs::path recorded = root_ / "recorded", unrecorded = root_ / "unrecorded";
+  r = run_tool(campaign + "--cd-accept-residual 1e-4 --stop-after 1 --out " + q(recorded));
+  ASSERT_EQ(r.exit_code, 3) << r.output;  // stopped after one probe
+  r = run_tool(campaign + "--out " + q(recorded));
+  EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint's setting differs
+  EXPECT_NE(r.output.find("cd_accept_residual"), std::string::npos) << r.output;
+  r = run_tool(campaign + "--cd-accept-residual 1e-4 --out " + q(recorded));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json_file(recorded / "probe_summary.json")["settings"]["cd_accept_residual"], 1e-4);
+  r = run_tool(campaign + "--out " + q(unrecorded));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_accept_residual"));
+}
+
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
   // Contact 73 of the frozen 100-disk structure at mu = 1, quasi-static, one starting
   // compliance: the lowering from 0.1 stops at a fold at 0.012 and no restart is exact. The

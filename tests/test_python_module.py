@@ -156,7 +156,8 @@ def signature_defaults(function):
                             "cd-interior-states-retries": "cd_interior_states_retries",
                             "cd-interior-iterations": "cd_interior_iterations",
                             "cd-interior-neighbourhood": "cd_interior_neighbourhood",
-                            "cd-compliant-start": "cd_compliant_start"}),
+                            "cd-compliant-start": "cd_compliant_start",
+                            "cd-accept-residual": "cd_accept_residual"}),
     ("bounds", unjam.bounds, {"gap-tol": "gap_tol", "fn-tol": "fn_tol", "threads": "threads",
                               "method": "method"}),
 ])
@@ -304,6 +305,26 @@ def test_the_continuation_takes_its_first_compliance_as_the_tool(tmp_path):
         unjam.probe(p, contact=14, method="cd", cd_compliant_start=1e-3)
     with pytest.raises(unjam.Error, match="--cd-compliant-start must be positive"):
         unjam.probe(p, contact=14, method="cd", cd_start="compliant", cd_compliant_start=0.0)
+
+
+def test_the_exact_probe_accepts_a_near_exact_solution_as_the_tool(tmp_path):
+    # cd_accept_residual as `unjam probe --cd-accept-residual`: on contact 8 of p200-mu1 (the
+    # quasi-static step, compliant start) the first path ends near-exact at 1.04e-5 g in 200
+    # pieces and the restart is exact (279 in all); accepting 1e-4, the probe stops at the first
+    # (docs/probe.md, "Accepting a near-exact solution"). Refused outside [1e-6, 1e-3] g.
+    fixture = str(Path(__file__).parent / "fixtures" / "p200-mu1")
+    p = unjam.read_packing(fixture)
+    for value, pieces, converged in [(1e-4, 200, False), (1e-6, 279, True)]:
+        out = tmp_path / str(value)
+        tool("probe", fixture, "--contact", 8, "--method", "cd", "--cd-start", "compliant",
+             "--cd-accept-residual", value, "--threads", 1, "--out", out, "--quiet")
+        rows = read_csv(out / "probe-8.csv")
+        r = unjam.probe(p, contact=8, method="cd", cd_start="compliant", cd_accept_residual=value)
+        assert r.converged == converged and r.sweeps == pieces, (value, r.sweeps)
+        assert (r.residual <= value) and (converged or r.residual > 1e-6), r.residual
+        assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
+    with pytest.raises(unjam.Error, match=r"--cd-accept-residual must be in \[1e-06, 0.001\] g"):
+        unjam.probe(p, contact=8, method="cd", cd_start="compliant", cd_accept_residual=1e-2)
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

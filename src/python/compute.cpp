@@ -152,7 +152,8 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
-                 double cd_interior_neighbourhood, double cd_compliant_start, int threads) {
+                 double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
+                 int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd;
@@ -164,6 +165,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   cd.interior_max_iterations = cd_interior_iterations;
   cd.interior_neighbourhood = cd_interior_neighbourhood;
   cd.compliant_start = cd_compliant_start;
+  cd.accept_residual = cd_accept_residual;
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
@@ -332,7 +334,8 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_states_retries") = cd.cd.interior_states_retries,
         py::arg("cd_interior_iterations") = cd.cd.interior_max_iterations,
         py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood,
-        py::arg("cd_compliant_start") = cd.cd.compliant_start, py::arg("threads") = 0,
+        py::arg("cd_compliant_start") = cd.cd.compliant_start,
+        py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -350,7 +353,9 @@ void bind_compute(py::module_& m) {
         "(docs/probe.md, \"The iterate's own states\", \"The interior-point method's iterations\", "
         "\"Keeping the iterates centred\"); cd_compliant_start: the compliance of the compliant "
         "continuation's first path (compliant and interior starts), as `unjam probe --cd-compliant-start` "
-        "(docs/probe.md, \"Where the continuation starts\")");
+        "(docs/probe.md, \"Where the continuation starts\"); cd_accept_residual: the residual (g) at which "
+        "a cd probe stops at a near-exact solution instead of searching on for an exact one, as `unjam probe "
+        "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\")");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -917,6 +917,9 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     throw Error("cd path: softer_factor must be > 1 (got " + std::to_string(ps.softer_factor) + ")");
   if (ps.max_probe_pieces < 0)
     throw Error("cd path: max_probe_pieces must be >= 0 (got " + std::to_string(ps.max_probe_pieces) + ")");
+  if (!(ps.accept_residual >= kExactStepTolerance && ps.accept_residual <= kMaxPathResidual))
+    throw Error("cd path: accept_residual must be in [" + std::to_string(kExactStepTolerance) + ", " +
+                std::to_string(kMaxPathResidual) + "] g (got " + std::to_string(ps.accept_residual) + ")");
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
@@ -942,7 +945,9 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   const int starts = soft && ps.retry ? 1 + ps.softer_starts : 1;
   std::vector<CdPathAttempt> paths;
   const auto exact = [&] { return best.f.size() > 0 && best.residual.max() <= kExactStepTolerance; };
-  for (int from = 0; from < starts && !exact() && !budget.spent(); ++from) {
+  // Good enough to end the search: exact, or within the residual the user accepts.
+  const auto enough = [&] { return best.f.size() > 0 && best.residual.max() <= ps.accept_residual; };
+  for (int from = 0; from < starts && !enough() && !budget.spent(); ++from) {
     double start = ps.compliant_start * std::pow(ps.softer_factor, from);  // soft: the next path's compliance
     double scaled = 0.0;  // lambda_max / compliance of the last restart that stopped short of lambda = 1
     for (int attempt = 0; attempt < attempts; ++attempt) {
@@ -984,7 +989,7 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         best = std::move(sol);
         best_stats = stats;
       }
-      if (exact()) break;
+      if (enough()) break;
       // Where the static network sticks, a restart's path is the one before it scaled: it
       // stops at lambda_max proportional to its compliance (forces ~ lambda / compliance; docs/
       // probe.md, "Where the path starts"). Two restarts in a row so, and the ones below would
@@ -1037,7 +1042,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     // Where not exact yet: the paths from `iterate` (or the compliant continuation), within
     // what is left of the budget; the lower residual is kept.
     const auto follow_on = [&](CdPathSettings at, const InteriorPointResult* iterate) {
-      if (sol.result.converged || spent) return;
+      if (residual(sol) <= ps.accept_residual || spent) return;
       if (ps.max_probe_pieces > 0) at.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - used);
       CdPathStats next;
       CdStepSolution alt = probe_from_start(packing, pb, settings, at, &next, iterate, iterate != nullptr);
@@ -1060,6 +1065,8 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     record_interior(*iterates, kept);
     sol.result.sweeps = kept.pieces_all;
   }
+  kept.accepted = sol.f.size() > 0 && !sol.result.converged && !kept.budget_spent &&
+                  sol.residual.max() <= ps.accept_residual;
   if (stats_out) *stats_out = std::move(kept);
   return sol;
 }

@@ -123,6 +123,13 @@ struct CdPathSettings {
   // "budget"; CdPathStats::pieces_all is then max_probe_pieces + 1). Deterministic, unlike
   // a limit in seconds (docs/probe.md, "A budget of pieces per probe").
   long long max_probe_pieces = 0;
+  // The residual (g) at which a probe stops following further paths (`--cd-accept-residual`):
+  // by default kExactStepTolerance, so only an exact solution ends the search before the
+  // budget; raised (at most kMaxPathResidual), the first path whose solution is within it ends
+  // the probe, which is then near-exact (not converged) where that solution is not exact. The
+  // paths after a near-exact solution mostly fail and cost most of a near-exact probe's pieces
+  // at 1000 disks (docs/probe.md, "Accepting a near-exact solution").
+  double accept_residual = kExactStepTolerance;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -144,6 +151,8 @@ struct CdPathStats {
   int pieces = 0;             // linear pieces of the returned path (state changes)
   long long pieces_all = 0;   // pieces of every path of the probe together (ProbeResult::sweeps)
   bool budget_spent = false;  // the probe stopped at CdPathSettings::max_probe_pieces
+  bool accepted = false;      // it stopped at a solution within CdPathSettings::accept_residual that
+                              // is not exact (before the budget was spent)
   int degenerate = 0;         // of them, zero-length (ties broken at one lambda)
   int refinements = 0;
   int lowerings = 0;          // of them, with the compliance lowered (CdPathStart::compliant)

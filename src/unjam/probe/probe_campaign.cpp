@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -232,6 +233,14 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
+  if (!(s.cd.accept_residual >= kExactStepTolerance && s.cd.accept_residual <= kMaxPathResidual)) {
+    char range[96];
+    std::snprintf(range, sizeof range, "must be in [%g, %g] g (got %g)", kExactStepTolerance, kMaxPathResidual,
+                  s.cd.accept_residual);
+    throw Error(std::string("--cd-accept-residual ") + range);
+  }
+  if (s.cd.accept_residual != CdPathSettings{}.accept_residual && s.method != ProbeMethod::kCd)
+    throw Error(std::string("--cd-accept-residual applies to the cd method, not to ") + method_name(s.method));
   if (!(s.cd.interior_states_pieces >= 0.0 && std::isfinite(s.cd.interior_states_pieces)))
     throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
                 std::to_string(s.cd.interior_states_pieces) + ")");
@@ -470,6 +479,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
     }
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
+    if (s.method == ProbeMethod::kCd && s.cd.accept_residual != CdPathSettings{}.accept_residual)
+      j["cd_accept_residual"] = s.cd.accept_residual;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.nlgs.window > 0.0) j["window_d"] = s.nlgs.window;            // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
