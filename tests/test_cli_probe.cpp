@@ -780,6 +780,21 @@ TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRec
   r = run_tool(campaign + "--out " + q(unrecorded));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_accept_residual"));
+  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json").contains("accepted"));
+  // The summary counts the near-exact probes within the residual: of --sample 3 --seed 11, contacts
+  // 29 and 256 end near-exact (1.0e-6 and 5.5e-6 g), exact without the option.
+  const std::string three = "probe " + q(p200) + " --sample 3 --seed 11 --method cd --cd-start compliant --threads 1 ";
+  r = run_tool(three + "--cd-accept-residual 1e-4 --out " + q(root_ / "three"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not converged: 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("near-exact within the accepted residual of 0.0001 g (--cd-accept-residual): 2 probes"),
+            std::string::npos) << r.output;
+  const nlohmann::json three_summary = read_json_file(root_ / "three" / "probe_summary.json");
+  EXPECT_EQ(three_summary["accepted"]["probes"], 2);
+  EXPECT_EQ(three_summary["accepted"]["accept_residual"], 1e-4);
+  r = run_tool(three + "--out " + q(root_ / "three-exact"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not converged: 0"), std::string::npos) << r.output;
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

@@ -465,6 +465,10 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   const long long max_pieces = settings_json.value("cd_max_pieces", 0LL);
   const int over_budget = probes_over_budget(state, max_pieces);
   if (max_pieces > 0) summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget}};
+  // cd with a residual it accepts (recorded where set): the probes near-exact within it.
+  const double accept = settings_json.value("cd_accept_residual", 0.0);
+  const int accepted = probes_accepted(state, accept);
+  if (accept > 0.0) summary["accepted"] = {{"accept_residual", accept}, {"probes", accepted}};
   summary["program_version"] = kVersion;
   summary["command"] = command_line();
   summary["packing"] = o.dir;
@@ -492,6 +496,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (max_pieces > 0)
     std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes\n", max_pieces,
                 over_budget);
+  if (accept > 0.0)
+    std::printf("  near-exact within the accepted residual of %g g (--cd-accept-residual): %d probes\n", accept,
+                accepted);
   if (o.max_inertia > 0.0)
     std::printf("  left out of the means and averages: %d probes with f_inertia above %g F0 (--max-inertia)\n",
                 sum.inertial, o.max_inertia);

@@ -369,6 +369,13 @@ int probes_over_budget(const CampaignState& state, long long max_pieces) {
   return n;
 }
 
+int probes_accepted(const CampaignState& state, double accept_residual) {
+  if (!(accept_residual > kExactStepTolerance)) return 0;
+  int n = 0;
+  for (const ProbeRow& r : state.rows) n += !r.converged && r.residual <= accept_residual;
+  return n;
+}
+
 CampaignSummary summarize(const Packing& p, const CampaignState& state, std::optional<FitWindow> window,
                           double max_inertia, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;

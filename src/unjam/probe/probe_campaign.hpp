@@ -199,6 +199,10 @@ std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSe
 // (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1); 0 where max_pieces <= 0.
 int probes_over_budget(const CampaignState& state, long long max_pieces);
 
+// The cd probes of `state` that are near-exact within accept_residual (CdPathSettings::
+// accept_residual, in g: not converged, residual at most it); 0 where it is the default.
+int probes_accepted(const CampaignState& state, double accept_residual);
+
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 // The means take the probes that enter_averages with max_inertia (the campaign's setting).
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
