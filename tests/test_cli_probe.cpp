@@ -28,6 +28,26 @@ class CliProbe : public testing::FixtureCopy {
  protected:
   void SetUp() override { copy("p50-mu0.1"); }
   double F0() const { return read_json_file(dir_ / "meta.json")["F0"].get<double>(); }
+  // A campaign (`campaign`: the command up to --out) run with `option` (e.g. "--cd-accept-residual
+  // 1e-4") records `key` = value in its settings, and its checkpoint does not resume without the
+  // option; the same campaign without it records no `key`. Returns the summary of the one without.
+  nlohmann::json expect_recorded_where_set(const std::string& campaign, const std::string& option,
+                                           const std::string& key, double value) {
+    const fs::path recorded = root_ / "recorded", unrecorded = root_ / "unrecorded";
+    testing::ToolRun r = run_tool(campaign + option + " --stop-after 1 --out " + q(recorded));
+    EXPECT_EQ(r.exit_code, 3) << r.output;  // stopped after one probe
+    r = run_tool(campaign + "--out " + q(recorded));
+    EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint's setting differs
+    EXPECT_NE(r.output.find(key), std::string::npos) << r.output;
+    r = run_tool(campaign + option + " --out " + q(recorded));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(read_json_file(recorded / "probe_summary.json")["settings"][key], value);
+    r = run_tool(campaign + "--out " + q(unrecorded));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json without = read_json_file(unrecorded / "probe_summary.json");
+    EXPECT_FALSE(without["settings"].contains(key));
+    return without;
+  }
 };
 
 TEST_F(CliProbe, SingleContactLpEqualsTheReferenceMaximumAndOpensThePair) {
@@ -734,19 +754,8 @@ TEST_F(CliProbe, TheContinuationStartsWhereTheUserSaysAndTheCampaignRecordsIt) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("path 1 at compliance 0.1: full opening; 8 lowerings, stopped at compliance 0.012"),
             std::string::npos) << r.output;
-  const std::string campaign = "probe " + q(dir_) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
-  const fs::path recorded = root_ / "recorded", unrecorded = root_ / "unrecorded";
-  r = run_tool(campaign + "--cd-compliant-start 1e-4 --stop-after 1 --out " + q(recorded));
-  ASSERT_EQ(r.exit_code, 3) << r.output;  // stopped after one probe
-  r = run_tool(campaign + "--out " + q(recorded));
-  EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint's setting differs
-  EXPECT_NE(r.output.find("cd_compliant_start"), std::string::npos) << r.output;
-  r = run_tool(campaign + "--cd-compliant-start 1e-4 --out " + q(recorded));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(read_json_file(recorded / "probe_summary.json")["settings"]["cd_compliant_start"], 1e-4);
-  r = run_tool(campaign + "--out " + q(unrecorded));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_compliant_start"));
+  expect_recorded_where_set("probe " + q(dir_) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ",
+                            "--cd-compliant-start 1e-4", "cd_compliant_start", 1e-4);
 }
 
 TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRecordsIt) {
@@ -767,20 +776,10 @@ TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRec
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("converged yes"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("path 2"), std::string::npos) << r.output;
-  const std::string campaign = "probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
-  const fs::path recorded = root_ / "recorded", unrecorded = root_ / "unrecorded";
-  r = run_tool(campaign + "--cd-accept-residual 1e-4 --stop-after 1 --out " + q(recorded));
-  ASSERT_EQ(r.exit_code, 3) << r.output;  // stopped after one probe
-  r = run_tool(campaign + "--out " + q(recorded));
-  EXPECT_NE(r.exit_code, 0) << r.output;  // the checkpoint's setting differs
-  EXPECT_NE(r.output.find("cd_accept_residual"), std::string::npos) << r.output;
-  r = run_tool(campaign + "--cd-accept-residual 1e-4 --out " + q(recorded));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(read_json_file(recorded / "probe_summary.json")["settings"]["cd_accept_residual"], 1e-4);
-  r = run_tool(campaign + "--out " + q(unrecorded));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json")["settings"].contains("cd_accept_residual"));
-  EXPECT_FALSE(read_json_file(unrecorded / "probe_summary.json").contains("accepted"));
+  const nlohmann::json without =
+      expect_recorded_where_set("probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ",
+                                "--cd-accept-residual 1e-4", "cd_accept_residual", 1e-4);
+  EXPECT_FALSE(without.contains("accepted"));
   // The summary counts the near-exact probes within the residual: of --sample 3 --seed 11, contacts
   // 29 and 256 end near-exact (1.0e-6 and 5.5e-6 g), exact without the option.
   const std::string three = "probe " + q(p200) + " --sample 3 --seed 11 --method cd --cd-start compliant --threads 1 ";

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -409,14 +408,13 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   char window[96] = "";
   if (s.nlgs.window > 0.0)
     std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
-  char budget[160] = "";
+  char budget[96] = "", accept[64] = "";
   if (s.cd.max_probe_pieces > 0)  // cd only (validate)
     std::snprintf(budget, sizeof budget, ", at most %lld pieces per probe", s.cd.max_probe_pieces);
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual)  // cd only (validate)
-    std::snprintf(budget + std::strlen(budget), sizeof budget - std::strlen(budget),
-                  ", stopping at a residual of %g g", s.cd.accept_residual);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, budget, omp_get_max_threads(), spread.c_str());
+    std::snprintf(accept, sizeof accept, ", stopping at a residual of %g g", s.cd.accept_residual);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, budget, accept, omp_get_max_threads(), spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
