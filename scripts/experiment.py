@@ -17,7 +17,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                (the paper's Fig. 3b inset);
   exact        with --cd-sample K > 0 (300 at the paper scale), on the sweep's packings of at
                most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd
-               --cd-start interior` (--cd-start)
+               --cd-start interior` (--cd-start; --cd-max-pieces, --cd-accept-residual and
+               --cd-compliant-start passed on where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
@@ -102,6 +103,15 @@ def parse_args(argv):
                    "probe (`unjam probe --cd-max-pieces`; stopped probes are counted in "
                    "exact-probe.csv and report.md; default 0: none; docs/probe.md, \"A budget "
                    "of pieces per probe\")")
+    p.add_argument("--cd-accept-residual", type=float, metavar="R", help="the exact probe "
+                   "stops its search at its first solution within R g, 1e-6 to 1e-3 (`unjam probe "
+                   "--cd-accept-residual`; such probes are near-exact and counted in "
+                   "exact-probe.csv and report.md; default: only an exact solution stops it; "
+                   "docs/probe.md, \"Accepting a near-exact solution\")")
+    p.add_argument("--cd-compliant-start", type=float, metavar="C", help="the compliance the "
+                   "exact probe's continuation starts from, > 0 (`unjam probe "
+                   "--cd-compliant-start`; default: unjam's; docs/probe.md, \"Where the "
+                   "continuation starts\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -130,6 +140,11 @@ def parse_args(argv):
         p.error(f"--cd-max-n must be >= 0, got {args.cd_max_n}")
     if args.cd_max_pieces is not None and args.cd_max_pieces < 0:
         p.error(f"--cd-max-pieces must be >= 0, got {args.cd_max_pieces}")
+    if args.cd_accept_residual is not None and not 1e-6 <= args.cd_accept_residual <= 1e-3:
+        p.error(f"--cd-accept-residual must be from 1e-6 to 1e-3 g, got {args.cd_accept_residual}")
+    if args.cd_compliant_start is not None and not (math.isfinite(args.cd_compliant_start)
+                                                    and args.cd_compliant_start > 0):
+        p.error(f"--cd-compliant-start must be a finite number > 0, got {args.cd_compliant_start}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -152,7 +167,7 @@ def main(argv=None):
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
-              "cd_start", "cd_max_pieces"):
+              "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

@@ -7,7 +7,7 @@ import os
 import time
 
 import sweep_table
-from experiment_stages import FIG4, fmt_mu
+from experiment_stages import FIG4, cd_options, fmt_mu
 from stage_runner import quote
 
 
@@ -111,10 +111,12 @@ def exact_probe_section(path, start):
          "'not exact': residual above 1e-6 g; 'without a solution': above 1e-3 g, left out of "
          "the cd means (the near-exact ones are kept); 'stopped by the budget': cd probes stopped "
          "by `--cd-max-pieces`, which are the hardest ones, so the cd means are those of the "
-         "probes solved within it.", "",
+         "probes solved within it; 'near-exact, accepted': cd probes whose search stopped at their "
+         "first solution within `--cd-accept-residual` (counted among the not exact).", "",
          "| mu | N | seeds | probes | not exact | without a solution | <F_crit>/<F_cont> lp | "
-         "<F_crit>/<F_cont> cd | alpha lp | alpha cd | CPU s per cd probe | stopped by the budget |",
-         "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+         "<F_crit>/<F_cont> cd | alpha lp | alpha cd | CPU s per cd probe | stopped by the budget | "
+         "near-exact, accepted |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (mu, n), g in sorted(groups.items()):
         probes = sum(int(r["probes"]) for r in g)
         bad = sum(int(r["not_exact"]) for r in g)
@@ -124,7 +126,8 @@ def exact_probe_section(path, start):
                                                        "F_crit_over_F_cont_cd", "alpha_lp",
                                                        "alpha_cd"))
                  + f" | {mean(g, 'cpu_s_per_probe_cd')[0]:.2f} | "
-                 + f"{sum(int(r.get('over_budget') or 0) for r in g)} |")
+                 + f"{sum(int(r.get('over_budget') or 0) for r in g)} | "
+                 + f"{sum(int(r.get('accepted') or 0) for r in g)} |")
     return L
 
 
@@ -175,7 +178,8 @@ def write_report(path, args, cfg, R, figures, command):
           f"- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
              f"--cd-start {cfg['cd_start']}"
-             + (f", --cd-max-pieces {cfg['cd_max_pieces']}" if cfg["cd_max_pieces"] else "")
+             + "".join(f", {flag} {value}" for flag, value in
+                       zip(cd_options(cfg)[::2], cd_options(cfg)[1::2]))
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

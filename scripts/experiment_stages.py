@@ -33,27 +33,35 @@ PY = sys.executable or "/usr/bin/python3"
 # except at mu = 0.2), or static (the branch from the static network; without friction the
 # fastest, with the same F_crit). cd_max_pieces: the exact probe's budget of pieces per probe
 # (`unjam probe --cd-max-pieces`; 0: none), which bounds its cost at N >= 1000 (docs/probe.md,
-# "A budget of pieces per probe").
+# "A budget of pieces per probe"). cd_accept_residual: stop a probe's search at its first solution
+# within this residual, in g (`unjam probe --cd-accept-residual`; 0: unjam's default, only an
+# exact solution stops it; docs/probe.md, "Accepting a near-exact solution").
+# cd_compliant_start: the compliance the continuation starts from (`unjam probe
+# --cd-compliant-start`; 0: unjam's default; docs/probe.md, "Where the continuation starts").
+# Both are passed to unjam only where set, so stages cached without them stay valid.
+CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
-             "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", "cd_max_pieces": 0},
+             "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
              "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior",
-             "cd_max_pieces": 0},
+             **CD_DEFAULTS},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
               "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "interior",
-              "cd_max_pieces": 0},
+              **CD_DEFAULTS},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
 # cd probes whose step was not solved exactly (residual above 1e-6 g); without_solution: those
 # of them without a solution (residual above 1e-3 g), left out of the cd means (the near-exact
 # ones are kept); alpha empty where the fit failed; over_budget: cd probes stopped by the
-# budget of pieces (cd_max_pieces; 0 without one), with or without a solution.
+# budget of pieces (cd_max_pieces; 0 without one), with or without a solution; accepted: cd
+# probes whose search stopped at a near-exact solution within cd_accept_residual (0 without
+# one; they are among not_exact).
 EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "without_solution",
                  "F_crit_over_F_cont_lp",
                  "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd",
-                 "over_budget"]
+                 "over_budget", "accepted"]
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
 # F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
@@ -139,16 +147,26 @@ def exact_probe_dirs(d):
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
 
 
-def exact_probe_stage(R, name, d, g, sample, start, dep, max_pieces):
-    """The exact probe (`unjam probe --sample K --method cd --cd-start START`, with
-    `--cd-max-pieces` where max_pieces > 0) and the lp probe of the same seeded contacts, into
-    d/exact-cd and d/exact-lp: the paper's probe beside the stand-in."""
+def cd_options(cfg):
+    """The exact probe's options of cfg as `unjam probe` arguments, each only where set
+    (CD_DEFAULTS: unset), so that a stage's command is the same as before they existed."""
+    args = []
+    for key, flag in (("cd_max_pieces", "--cd-max-pieces"),
+                      ("cd_accept_residual", "--cd-accept-residual"),
+                      ("cd_compliant_start", "--cd-compliant-start")):
+        if cfg.get(key, 0) > 0:
+            args += [flag, str(cfg[key]) if isinstance(cfg[key], int) else repr(cfg[key])]
+    return args
+
+
+def exact_probe_stage(R, name, d, g, sample, start, dep, cd_args):
+    """The exact probe (`unjam probe --sample K --method cd --cd-start START` and cd_args, from
+    cd_options) and the lp probe of the same seeded contacts, into d/exact-cd and d/exact-lp:
+    the paper's probe beside the stand-in."""
     outs = exact_probe_dirs(d)
     args = {m: ["--sample", str(sample), "--seed", "1", "--method", m, "--g", repr(g)]
             for m in outs}
-    args["cd"] += ["--cd-start", start]
-    if max_pieces > 0:
-        args["cd"] += ["--cd-max-pieces", str(max_pieces)]
+    args["cd"] += ["--cd-start", start] + list(cd_args)
     params = {"commands": [["unjam", "probe", d] + args[m] for m in sorted(outs)],
               "version": R.version}
 
@@ -159,7 +177,7 @@ def exact_probe_stage(R, name, d, g, sample, start, dep, max_pieces):
             if not probe_done(outs[m]):
                 R.call(st, R.unjam_cmd("probe", d, *args[m], "--out", outs[m], "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
-                 f"--cd-start {start} (and lp)", os.path.join(d, "stage.json"), params, run,
+                 f"--cd-start {' '.join([start] + list(cd_args))} (and lp)", os.path.join(d, "stage.json"), params, run,
                  lambda: all(probe_done(o) for o in outs.values()), [dep])
 
 
@@ -173,7 +191,8 @@ def exact_row(d, mu, n, seed):
             "F_crit_over_F_cont_cd": repr(float(s["cd"]["F_crit_over_F_cont"])),
             "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),
             "cpu_s_per_probe_cd": repr(cpu_per_probe(s["cd"], max(1, s["cd"]["probes"]))),
-            "over_budget": s["cd"].get("over_budget", {}).get("probes", 0)}
+            "over_budget": s["cd"].get("over_budget", {}).get("probes", 0),
+            "accepted": s["cd"].get("accepted", {}).get("probes", 0)}
 
 
 def plot_stage(R, name, outputs, cmds, deps):
@@ -230,10 +249,11 @@ def table_stage(R, name, path, entries, deps, columns=sweep_table.COLUMNS, row=s
         st.record["commands"].append(f"(python) write {path} from {len(entries)} summaries")
         write_table(path, [row(d, mu, n, s) for d, mu, n, s in entries], columns)
 
-    def check():
+    def check():  # every row, in today's columns (a table of an older version is rewritten)
         try:
             with open(path) as f:
-                return len(list(csv.DictReader(f))) == len(entries)
+                r = csv.DictReader(f)
+                return len(list(r)) == len(entries) and r.fieldnames == list(columns)
         except OSError:
             return False
     return Stage(name, os.path.relpath(path, R.out), os.path.join(R.out, "stage.json"),
@@ -342,7 +362,7 @@ def build(args, cfg, R):
     for p in exact:
         stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
-                                        p["pack"], cfg["cd_max_pieces"]))
+                                        p["pack"], cd_options(cfg)))
 
     # Fig. 4
     fig4 = os.path.join(out, "fig4-ensemble.png")

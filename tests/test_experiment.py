@@ -285,6 +285,41 @@ class ExperimentTiny(unittest.TestCase):
         self.assertIn("--cd-max-pieces 2", report)
         self.assertIn("| stopped by the budget |", report)
 
+    def test_9c_exact_probe_options_are_passed_on_where_given(self):
+        # --cd-accept-residual and --cd-compliant-start reach `unjam probe` (recorded in the cd
+        # summary's settings), the budget of test_9b is gone from the command (so its stages run
+        # again), the accepted probes are counted in exact-probe.csv as in the summary, and the
+        # report names both options.
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3",
+                           "--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3"))
+        self.assertTrue(all(res[k] == "ran" for k in res if k.startswith("exact ")), res)
+        self.assertTrue(all(res[k] == "cached" for k in res if k.startswith(("pack ", "probe "))),
+                        res)
+        with open(os.path.join(self.out, "exact-probe.csv")) as f:
+            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        self.assertEqual(set(rows), {"0", "0.1", "1"})
+        for mu, r in rows.items():
+            d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
+            with open(os.path.join(d, "probe_summary.json")) as f:
+                s = json.load(f)
+            self.assertEqual(s["settings"]["cd_accept_residual"], 1e-4)
+            self.assertEqual(s["settings"]["cd_compliant_start"], 1e-3)
+            self.assertNotIn("over_budget", s)
+            self.assertEqual(int(r["accepted"]), s["accepted"]["probes"], mu)
+            with open(os.path.join(d, "probes.csv")) as f:
+                probes = list(csv.DictReader(f))
+            # an accepted probe is near-exact: not converged, residual within 1e-4 g
+            near = [p for p in probes if p["converged"] == "0"]
+            self.assertEqual(len(near), int(r["not_exact"]), mu)
+            self.assertTrue(all(float(p["residual"]) <= 1e-4 for p in near), (mu, near))
+        with open(os.path.join(self.out, "report.md")) as f:
+            report = f.read()
+        self.assertIn("--cd-accept-residual 0.0001, --cd-compliant-start 0.001", report)
+        self.assertIn("| near-exact, accepted |", report)
+        self.assertNotIn("--cd-max-pieces 2", report)
+        self.assertIn("--cd-start interior --cd-accept-residual 0.0001 --cd-compliant-start 0.001 "
+                      "(and lp)", report)  # the stages' own lines in the timings
+
 
 class ExactProbeTable(unittest.TestCase):
     """exact-probe.csv and its report section, from synthetic probe summaries: the cd probes
@@ -307,11 +342,13 @@ class ExactProbeTable(unittest.TestCase):
                          "ranks": [{"busy_seconds": 3000.0}]}
                     if m == "cd" and seed == 2:  # a budget stopped 2 (a summary without one: 0)
                         s["over_budget"] = {"max_pieces": 100, "probes": 2}
+                    if m == "cd" and seed == 1:  # 4 accepted near-exact (without the option: 0)
+                        s["accepted"] = {"accept_residual": 1e-5, "probes": 4}
                     with open(os.path.join(o, "probe_summary.json"), "w") as f:
                         json.dump(s, f)
                 rows.append(experiment_stages.exact_row(d, 0.5, 500, seed))
-            self.assertEqual([(r["not_exact"], r["without_solution"], r["over_budget"])
-                              for r in rows], [(5, 2, 0), (3, 1, 2)])
+            self.assertEqual([(r["not_exact"], r["without_solution"], r["over_budget"],
+                               r["accepted"]) for r in rows], [(5, 2, 0, 4), (3, 1, 2, 0)])
             table = os.path.join(tmp, "exact-probe.csv")
             with open(table, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
@@ -321,7 +358,7 @@ class ExactProbeTable(unittest.TestCase):
             self.assertIn("| without a solution |", report)
             self.assertIn("| 0.5 | 500 | 2 | 600 | 8 | 3 | 2.0000 ± 0.0000 | 1.5000 ± 0.0000 |",
                           report)
-            self.assertTrue(any(line.startswith("| 0.5 | 500 |") and line.endswith("| 2 |")
+            self.assertTrue(any(line.startswith("| 0.5 | 500 |") and line.endswith("| 2 | 4 |")
                                 for line in report.splitlines()), report)
 
 
@@ -336,7 +373,11 @@ class ExperimentArguments(unittest.TestCase):
                                   (["--mus", "-1"], "--mus"), (["--ns", "2"], "at least 8"),
                                   (["--samples", "0"], "--samples"), (["--probe-g", "nan"], "--probe-g"),
                                   (["--probe-g", "-1e-9"], "--probe-g"),
-                                  (["--cd-max-pieces", "-1"], "--cd-max-pieces")]:
+                                  (["--cd-max-pieces", "-1"], "--cd-max-pieces"),
+                                  (["--cd-accept-residual", "1e-2"], "--cd-accept-residual"),
+                                  (["--cd-accept-residual", "nan"], "--cd-accept-residual"),
+                                  (["--cd-compliant-start", "0"], "--cd-compliant-start"),
+                                  (["--cd-compliant-start", "inf"], "--cd-compliant-start")]:
                 p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out,
                                     "--unjam", UNJAM, *extra],
                                    capture_output=True, text=True, cwd=REPO, timeout=60)
