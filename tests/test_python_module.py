@@ -4,6 +4,7 @@ long call. Run by ctest (python_module) with PYTHONPATH=build/<preset>/python an
 to the tool; by hand: PYTHONPATH=build/release/python UNJAM=build/release/unjam \
 /usr/bin/python3 -m pytest tests/test_python_module.py
 """
+import copy
 import csv
 import json
 import os
@@ -325,6 +326,53 @@ def test_the_exact_probe_accepts_a_near_exact_solution_as_the_tool(tmp_path):
         assert [[float(x["ux"]), float(x["uy"])] for x in rows] == r.u.tolist()
     with pytest.raises(unjam.Error, match=r"--cd-accept-residual must be in \[1e-06, 0.001\] g"):
         unjam.probe(p, contact=8, method="cd", cd_start="compliant", cd_accept_residual=1e-2)
+
+
+def test_the_cd_settings_are_one_typed_object():
+    # unjam.CdSettings: the cd method's settings as `unjam probe --cd-*` sets them, the tool's
+    # defaults, every assignment range-checked (a refused one leaves the object as it was), and
+    # unjam.probe(cd=...) the same probe as the keywords: contact 8 of p200-mu1 as in the test
+    # above (near-exact in 200 pieces accepting 1e-4, compliant start, continuation from 0.1).
+    d = unjam.CdSettings()
+    assert (d.start, d.compliant_start, d.softer_starts, d.max_pieces, d.accept_residual) == \
+        ("static", 0.1, 2, 0, 1e-6)
+    assert (d.interior_states_pieces, d.interior_states_stall, d.interior_states_retries,
+            d.interior_iterations, d.interior_neighbourhood) == (0.1, 20, 2, 100, 0.0)
+    s = unjam.CdSettings(start="compliant", accept_residual=1e-4)
+    assert s != d and s == unjam.CdSettings(start="compliant", accept_residual=1e-4)
+    assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
+                              "max_pieces=0, accept_residual=0.0001, ")
+    assert eval("unjam." + repr(s)) == s and copy.deepcopy(s) == s
+    for field, value, message in [("accept_residual", 1e-2, r"--cd-accept-residual must be in \[1e-06"),
+                                  ("compliant_start", 0.0, "--cd-compliant-start must be positive"),
+                                  ("compliant_start", float("inf"), "--cd-compliant-start must be positive"),
+                                  ("max_pieces", -1, "--cd-max-pieces must be >= 0"),
+                                  ("softer_starts", -1, "--cd-softer-starts must be >= 0"),
+                                  ("interior_iterations", 0, "--cd-interior-iterations must be >= 1"),
+                                  ("interior_neighbourhood", 1.0, "--cd-interior-neighbourhood must be in"),
+                                  ("start", "soft", "--cd-start must be static, lp, compliant or interior")]:
+        t = copy.copy(s)
+        with pytest.raises(unjam.Error, match=message):
+            setattr(t, field, value)
+        assert t == s, field
+        with pytest.raises(unjam.Error, match=message):
+            unjam.CdSettings(**{field: value})
+    fixture = str(Path(__file__).parent / "fixtures" / "p200-mu1")
+    p = unjam.read_packing(fixture)
+    typed = unjam.probe(p, contact=8, method="cd", cd=s)
+    keywords = unjam.probe(p, contact=8, method="cd", cd_start="compliant", cd_accept_residual=1e-4)
+    assert (typed.converged, typed.sweeps) == (False, 200)
+    assert (typed.f_crit, typed.residual, typed.u.tolist()) == \
+        (keywords.f_crit, keywords.residual, keywords.u.tolist())
+    s.accept_residual = 1e-6  # the default again: the search goes on to the exact restart
+    assert (unjam.probe(p, contact=8, method="cd", cd=s).sweeps, s.accept_residual) == (279, 1e-6)
+    # what depends on the method is checked where the settings are used, as the tool does
+    with pytest.raises(unjam.Error, match="applies to the cd method's compliant and interior starts only"):
+        unjam.probe(p, contact=8, method="cd", cd=unjam.CdSettings(compliant_start=1e-3))
+    with pytest.raises(unjam.Error, match="not both"):
+        unjam.probe(p, contact=8, method="cd", cd=s, cd_max_pieces=100)
+    with pytest.raises(unjam.Error, match="not both"):
+        unjam.probe(p, contact=8, method="cd", cd=s, cd_start="interior")
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

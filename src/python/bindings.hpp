@@ -16,6 +16,7 @@ namespace py = pybind11;
 
 void bind_packing(py::module_& m);
 void bind_compute(py::module_& m);
+void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute (its default)
 
 // A should_stop hook: from the calling thread only, at most every 0.1 s, it takes the GIL
 // and runs PyErr_CheckSignals; after a KeyboardInterrupt (or any error a handler raised)

@@ -124,14 +124,13 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
   return run_compaction(std::move(p), a);
 }
 
-// cd: the cd method's keywords (`unjam probe --cd-*`) but its start, named by cd_start.
+// cd: the cd method's settings (`unjam probe --cd-*`), from unjam.CdSettings or the keywords.
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
                                 std::optional<double> dt, double velocity_tol, long long max_sweeps,
-                                const std::string& cd_start, const CdPathSettings& cd, std::optional<double> window) {
+                                const CdPathSettings& cd, std::optional<double> window) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.cd = cd;
-  s.cd.start = cd_start_from_name(cd_start);
   s.nlgs.g = s.kinematic.g = g;
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
@@ -144,6 +143,16 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   return s;
 }
 
+// The fields the cd_* keywords of unjam.probe set, equal in a and b.
+bool same_cd_keywords(const CdPathSettings& a, const CdPathSettings& b) {
+  return a.start == b.start && a.softer_starts == b.softer_starts && a.max_probe_pieces == b.max_probe_pieces &&
+         a.interior_states_pieces == b.interior_states_pieces && a.interior_states_stall == b.interior_states_stall &&
+         a.interior_states_retries == b.interior_states_retries &&
+         a.interior_max_iterations == b.interior_max_iterations &&
+         a.interior_neighbourhood == b.interior_neighbourhood && a.compliant_start == b.compliant_start &&
+         a.accept_residual == b.accept_residual;
+}
+
 // probe_contacts (in parallel; Ctrl-C checked between probes and, by the calling thread's
 // probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
 // in the order of contacts=[...].
@@ -153,10 +162,11 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
                  double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
-                 int threads) {
+                 std::optional<CdPathSettings> cd_settings, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd;
+  cd.start = cd_start_from_name(cd_start);
   cd.softer_starts = cd_softer_starts;
   cd.max_probe_pieces = cd_max_pieces;
   cd.interior_states_pieces = cd_interior_states_pieces;
@@ -166,7 +176,12 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   cd.interior_neighbourhood = cd_interior_neighbourhood;
   cd.compliant_start = cd_compliant_start;
   cd.accept_residual = cd_accept_residual;
-  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd_start, cd, window);
+  if (cd_settings) {  // cd=unjam.CdSettings(...): the keywords must then be left at their defaults
+    if (!same_cd_keywords(cd, CdPathSettings{}))
+      throw Error("give the cd settings either as cd=unjam.CdSettings(...) or as cd_* keywords, not both");
+    cd = *cd_settings;
+  }
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   s.nlgs.cancel = [&poll] { return poll(); };
@@ -335,7 +350,8 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_iterations") = cd.cd.interior_max_iterations,
         py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood,
         py::arg("cd_compliant_start") = cd.cd.compliant_start,
-        py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("threads") = 0,
+        py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("cd") = py::none(),
+        py::arg("threads") = 0,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -355,7 +371,9 @@ void bind_compute(py::module_& m) {
         "continuation's first path (compliant and interior starts), as `unjam probe --cd-compliant-start` "
         "(docs/probe.md, \"Where the continuation starts\"); cd_accept_residual: the residual (g) at which "
         "a cd probe stops at a near-exact solution instead of searching on for an exact one, as `unjam probe "
-        "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\")");
+        "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\"); cd: all of the cd method's "
+        "settings as one unjam.CdSettings (its start included), instead of the cd_* keywords, which must then "
+        "be left at their defaults");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

@@ -41,5 +41,6 @@ PYBIND11_MODULE(unjam, m) {
   // ValueError, with the library's message.
   py::register_exception<unjam::Error>(m, "Error", PyExc_ValueError);
   unjam::python::bind_packing(m);
+  unjam::python::bind_cd_settings(m);
   unjam::python::bind_compute(m);
 }

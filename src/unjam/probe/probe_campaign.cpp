@@ -211,6 +211,32 @@ double default_probe_dt(ProbeMethod method, double g) {
   return ProbeSettings{}.dt;
 }
 
+void validate(const CdPathSettings& cd) {
+  if (cd.softer_starts < 0)
+    throw Error("--cd-softer-starts must be >= 0 (got " + std::to_string(cd.softer_starts) + ")");
+  if (!(cd.compliant_start > 0.0 && std::isfinite(cd.compliant_start)))
+    throw Error("--cd-compliant-start must be positive and finite (got " + std::to_string(cd.compliant_start) + ")");
+  if (cd.max_probe_pieces < 0)
+    throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(cd.max_probe_pieces) + ")");
+  if (!(cd.accept_residual >= kExactStepTolerance && cd.accept_residual <= kMaxPathResidual)) {
+    char range[96];
+    std::snprintf(range, sizeof range, "must be in [%g, %g] g (got %g)", kExactStepTolerance, kMaxPathResidual,
+                  cd.accept_residual);
+    throw Error(std::string("--cd-accept-residual ") + range);
+  }
+  if (!(cd.interior_states_pieces >= 0.0 && std::isfinite(cd.interior_states_pieces)))
+    throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
+                std::to_string(cd.interior_states_pieces) + ")");
+  if (cd.interior_states_stall < 0)
+    throw Error("--cd-interior-states-stall must be >= 0 (got " + std::to_string(cd.interior_states_stall) + ")");
+  if (cd.interior_states_retries < 0)
+    throw Error("--cd-interior-states-retries must be >= 0 (got " + std::to_string(cd.interior_states_retries) + ")");
+  if (cd.interior_max_iterations < 1)
+    throw Error("--cd-interior-iterations must be >= 1 (got " + std::to_string(cd.interior_max_iterations) + ")");
+  if (!(cd.interior_neighbourhood >= 0.0 && cd.interior_neighbourhood < 1.0))
+    throw Error("--cd-interior-neighbourhood must be in [0, 1) (got " + std::to_string(cd.interior_neighbourhood) + ")");
+}
+
 void validate(const CampaignSettings& s) {
   const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   if (!positive(s.nlgs.g) || !positive(s.kinematic.g) || !positive(s.nlgs.dt) ||
@@ -220,38 +246,16 @@ void validate(const CampaignSettings& s) {
     throw Error("the largest inertia of a probe that enters the averages must be >= 0 and finite (in F0)");
   if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
     throw Error("a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp");
-  if (s.cd.softer_starts < 0)
-    throw Error("--cd-softer-starts must be >= 0 (got " + std::to_string(s.cd.softer_starts) + ")");
+  validate(s.cd);
   if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
       !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
     throw Error("--cd-softer-starts applies to the cd method's compliant start only");
-  if (!(s.cd.compliant_start > 0.0 && std::isfinite(s.cd.compliant_start)))
-    throw Error("--cd-compliant-start must be positive and finite (got " + std::to_string(s.cd.compliant_start) + ")");
   if (s.cd.compliant_start != CdPathSettings{}.compliant_start && !has_continuation(s))
     throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
-  if (s.cd.max_probe_pieces < 0)
-    throw Error("--cd-max-pieces must be >= 0 (got " + std::to_string(s.cd.max_probe_pieces) + ")");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
-  if (!(s.cd.accept_residual >= kExactStepTolerance && s.cd.accept_residual <= kMaxPathResidual)) {
-    char range[96];
-    std::snprintf(range, sizeof range, "must be in [%g, %g] g (got %g)", kExactStepTolerance, kMaxPathResidual,
-                  s.cd.accept_residual);
-    throw Error(std::string("--cd-accept-residual ") + range);
-  }
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-accept-residual applies to the cd method, not to ") + method_name(s.method));
-  if (!(s.cd.interior_states_pieces >= 0.0 && std::isfinite(s.cd.interior_states_pieces)))
-    throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
-                std::to_string(s.cd.interior_states_pieces) + ")");
-  if (s.cd.interior_states_stall < 0)
-    throw Error("--cd-interior-states-stall must be >= 0 (got " + std::to_string(s.cd.interior_states_stall) + ")");
-  if (s.cd.interior_states_retries < 0)
-    throw Error("--cd-interior-states-retries must be >= 0 (got " + std::to_string(s.cd.interior_states_retries) + ")");
-  if (s.cd.interior_max_iterations < 1)
-    throw Error("--cd-interior-iterations must be >= 1 (got " + std::to_string(s.cd.interior_max_iterations) + ")");
-  if (!(s.cd.interior_neighbourhood >= 0.0 && s.cd.interior_neighbourhood < 1.0))
-    throw Error("--cd-interior-neighbourhood must be in [0, 1) (got " + std::to_string(s.cd.interior_neighbourhood) + ")");
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)

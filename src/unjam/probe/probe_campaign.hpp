@@ -154,6 +154,10 @@ CampaignSettings campaign_settings_for(const Packing& packing);
 // finite and >= 0, for a cd start other than the static network with a method other than cd,
 // and for max_inertia > 0 with lp (which has no time step).
 void validate(const CampaignSettings& settings);
+// The range checks of the cd method's own settings (those `unjam probe --cd-*` sets), which do
+// not depend on the method or start: validate(CampaignSettings) makes them too, and the
+// Python module's unjam.CdSettings on every assignment. Throws unjam::Error naming the option.
+void validate(const CdPathSettings& cd);
 
 // The one rule for which probes enter a campaign's averages and means: those with a solution
 // and, where max_inertia (CampaignSettings::max_inertia) > 0, with f_inertia at most

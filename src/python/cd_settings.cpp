@@ -1,0 +1,123 @@
+// unjam.CdSettings: the cd method's settings (CdPathSettings) as one typed object, the fields
+// that `unjam probe --cd-*` sets, under the options' names without the prefix (--cd-max-pieces:
+// max_pieces). Every assignment is range-checked as the tool checks its options (validate of
+// CdPathSettings); what depends on the method or the start (e.g. compliant_start with the
+// static start) is checked where unjam.probe takes them (docs/probe.md, "At a glance").
+#include <sstream>
+#include <string>
+
+#include "python/bindings.hpp"
+#include "unjam/probe/cd_path.hpp"
+#include "unjam/probe/probe_campaign.hpp"
+
+namespace unjam::python {
+namespace {
+
+using Class = py::class_<CdPathSettings>;
+
+// A read-write field whose every assignment is checked: the settings change only if the new
+// value passes validate(CdPathSettings).
+template <class T>
+void checked_field(Class& c, const char* name, T CdPathSettings::*member, const char* doc) {
+  c.def_property(
+      name, [member](const CdPathSettings& s) { return s.*member; },
+      [member](CdPathSettings& s, T value) {
+        CdPathSettings t = s;
+        t.*member = value;
+        validate(t);
+        s = t;
+      },
+      doc);
+}
+
+// A number as Python writes it (the shortest text that reads back the same).
+std::string number(double v) { return py::repr(py::float_(v)).cast<std::string>(); }
+
+std::string repr(const CdPathSettings& s) {
+  std::ostringstream o;
+  o << "CdSettings(start='" << cd_start_name(s.start) << "', compliant_start=" << number(s.compliant_start)
+    << ", softer_starts=" << s.softer_starts << ", max_pieces=" << s.max_probe_pieces
+    << ", accept_residual=" << number(s.accept_residual)
+    << ", interior_states_pieces=" << number(s.interior_states_pieces)
+    << ", interior_states_stall=" << s.interior_states_stall
+    << ", interior_states_retries=" << s.interior_states_retries
+    << ", interior_iterations=" << s.interior_max_iterations
+    << ", interior_neighbourhood=" << number(s.interior_neighbourhood) << ")";
+  return o.str();
+}
+
+// The fields CdSettings shows (and compares): those of repr.
+bool same(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == repr(b); }
+
+}  // namespace
+
+void bind_cd_settings(py::module_& m) {
+  const CdPathSettings d;
+  Class c(m, "CdSettings",
+          "the cd method's settings, as `unjam probe --cd-*` sets them (each field is the option "
+          "without its --cd- prefix; the defaults are the tool's); pass one as unjam.probe(..., "
+          "method='cd', cd=settings). Every assignment is range-checked; docs/probe.md");
+  c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
+                    double accept_residual, double interior_states_pieces, int interior_states_stall,
+                    int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
+          CdPathSettings s;
+          s.start = cd_start_from_name(start);
+          s.compliant_start = compliant_start;
+          s.softer_starts = softer_starts;
+          s.max_probe_pieces = max_pieces;
+          s.accept_residual = accept_residual;
+          s.interior_states_pieces = interior_states_pieces;
+          s.interior_states_stall = interior_states_stall;
+          s.interior_states_retries = interior_states_retries;
+          s.interior_max_iterations = interior_iterations;
+          s.interior_neighbourhood = interior_neighbourhood;
+          validate(s);
+          return s;
+        }),
+        py::kw_only(), py::arg("start") = cd_start_name(d.start), py::arg("compliant_start") = d.compliant_start,
+        py::arg("softer_starts") = d.softer_starts, py::arg("max_pieces") = d.max_probe_pieces,
+        py::arg("accept_residual") = d.accept_residual,
+        py::arg("interior_states_pieces") = d.interior_states_pieces,
+        py::arg("interior_states_stall") = d.interior_states_stall,
+        py::arg("interior_states_retries") = d.interior_states_retries,
+        py::arg("interior_iterations") = d.interior_max_iterations,
+        py::arg("interior_neighbourhood") = d.interior_neighbourhood);
+  c.def_property(
+      "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
+      [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
+      "where the path starts: 'static', 'compliant', 'lp' or 'interior' (--cd-start; docs/probe.md, "
+      "\"Where the path starts\")");
+  checked_field(c, "compliant_start", &CdPathSettings::compliant_start,
+                "the compliance of the compliant continuation's first path, > 0 (--cd-compliant-start; "
+                "docs/probe.md, \"Where the continuation starts\")");
+  checked_field(c, "softer_starts", &CdPathSettings::softer_starts,
+                "the compliant start's softer starts, >= 0 (--cd-softer-starts)");
+  checked_field(c, "max_pieces", &CdPathSettings::max_probe_pieces,
+                "a probe's budget of pieces over all its paths, >= 0 (0: none; --cd-max-pieces; "
+                "docs/probe.md, \"A budget of pieces per probe\")");
+  checked_field(c, "accept_residual", &CdPathSettings::accept_residual,
+                "the residual (g) at which a probe stops at a near-exact solution, 1e-6 (the default: only "
+                "an exact one) to 1e-3 (--cd-accept-residual; docs/probe.md, \"Accepting a near-exact "
+                "solution\")");
+  checked_field(c, "interior_states_pieces", &CdPathSettings::interior_states_pieces,
+                "interior start: the cut of the path from the iterate's own states, pieces per contact, "
+                ">= 0 (--cd-interior-states-pieces)");
+  checked_field(c, "interior_states_stall", &CdPathSettings::interior_states_stall,
+                "interior start: pieces without progress that cut that path, >= 0 "
+                "(--cd-interior-states-stall)");
+  checked_field(c, "interior_states_retries", &CdPathSettings::interior_states_retries,
+                "interior start: that path's retries at 10x its compliance, >= 0 "
+                "(--cd-interior-states-retries)");
+  checked_field(c, "interior_iterations", &CdPathSettings::interior_max_iterations,
+                "interior start: the interior-point method's cap of iterations, >= 1 "
+                "(--cd-interior-iterations)");
+  checked_field(c, "interior_neighbourhood", &CdPathSettings::interior_neighbourhood,
+                "interior start: the wide neighbourhood of a second interior-point run, in [0, 1) (0: none; "
+                "--cd-interior-neighbourhood)");
+  c.def("__repr__", &repr);
+  c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same(a, b); }, py::is_operator());
+  c.def("__copy__", [](const CdPathSettings& s) { return s; });
+  c.def("__deepcopy__", [](const CdPathSettings& s, py::dict) { return s; }, py::arg("memo"));
+}
+
+}  // namespace unjam::python
