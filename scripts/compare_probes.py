@@ -77,6 +77,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from campaign_time import cpu_per_probe  # noqa: E402
+from plot_exact_sweep import friction_figure  # noqa: E402
 from unjam_plot import (UserError, json_number, read_csv, read_json, require_dir,  # noqa: E402
                         run_main, save_figure, warn, write_file_atomic)
 
@@ -477,46 +478,6 @@ def figure(pairs, ratios):
                 transform=ax.transAxes, ha="right", va="bottom", fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    fig.tight_layout()
-    return fig
-
-
-def friction_figure(pairs):
-    """<F_crit>/<F_cont> and alpha by both methods against mu, one colour per N: each
-    packing a marker (lp open, cd filled), the lines through the means over its seeds."""
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(9.6, 4.0))
-    sizes = sorted({p["N"] for p in pairs}, key=lambda n: (n is None, n or 0))
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    panels = ((axes[0], "F_crit_over_F_cont_{}", None, "<F_crit> / <F_cont>"),
-              (axes[1], "alpha_{}", "alpha_{}_err", "alpha  (d(r) ~ r^-alpha)"))
-    for i, n in enumerate(sizes):
-        group = [p for p in pairs if p["N"] == n and math.isfinite(p["mu"])]
-        colour = colours[i % len(colours)]
-        for ax, key, err, _ in panels:
-            for m, marker, face in (("lp", "s", "none"), ("cd", "o", colour)):
-                pts = [(p["mu"], p[key.format(m)], p[err.format(m)] if err else math.nan)
-                       for p in group if math.isfinite(p[key.format(m)])]
-                if not pts:
-                    continue
-                ax.errorbar([x for x, _, _ in pts], [y for _, y, _ in pts],
-                            yerr=[e if math.isfinite(e) else 0.0 for _, _, e in pts],
-                            fmt=marker, mfc=face, mec=colour, ecolor=colour, ms=5,
-                            linestyle="none")
-                mus = sorted({x for x, _, _ in pts})
-                means = [statistics.fmean(y for x, y, _ in pts if x == mu) for mu in mus]
-                ax.plot(mus, means, color=colour, linestyle="--" if m == "lp" else "-",
-                        linewidth=1.0, label=f"{m}, N = {n}" if n is not None else m)
-    for ax, _, _, ylabel in panels:
-        ax.set_xscale("symlog", linthresh=0.01)
-        ax.set_xlim(left=-0.002)  # the mu = 0 markers whole
-        ax.set_xlabel("mu (linear below 0.01)")
-        ax.set_ylabel(ylabel)
-        ax.grid(alpha=0.3)
-    axes[0].axhline(1.0, color="0.4", linewidth=0.8)
-    axes[0].legend(fontsize=8)
-    axes[0].set_title("lp (open, dashed) and cd (filled, solid) on the same contacts",
-                      fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -26,7 +26,9 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                --contact K`) and its displacement field drawn (plot_probe_field.py);
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),
                OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing);
-  figures      fig3-friction-sweep.png, fig2-profiles.png (largest N, one curve per mu),
+  figures      fig3-friction-sweep.png, fig3-exact-vs-lp.png (with --cd-sample: Fig. 3 by both
+               probes on the same contacts, scripts/plot_exact_sweep.py), fig2-profiles.png
+               (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
                (docs/results/README.md), agree / disagree per finding, parameters, timings, figures.

@@ -395,6 +395,13 @@ def build(args, cfg, R):
     cmd3 += (["--fixed", fixed_csv] if source else []) + ["--out", fig3]
     stages.append(plot_stage(R, "plot fig3", [fig3], [cmd3],
                              ["table sweep"] + (["table fixed"] if source else [])))
+    # Fig. 3 by the paper's probe beside the stand-in, from the exact-probe table.
+    fig3x = os.path.join(out, "fig3-exact-vs-lp.png")
+    if exact:
+        stages.append(plot_stage(R, "plot fig3 exact", [fig3x],
+                                 [[PY, os.path.join(SCRIPTS, "plot_exact_sweep.py"),
+                                   os.path.join(out, "exact-probe.csv"), "--out", fig3x]],
+                                 ["table exact"]))
     nmax = max(cfg["ns"])
     # Fig. 2 per size: d(r) of every mu (first seed); fig2-profiles.png is the largest N.
     fig2_of = {}
@@ -431,6 +438,9 @@ def build(args, cfg, R):
                *[(f"Fig. 2: d(r) per mu, N = {n}", fig2_of[n]) for n in cfg["ns"] if n != nmax],
                ("Fig. 3: friction sweep" + (" (with the fixed-packing inset)" if source else ""),
                 fig3),
+               *([(f"Fig. 3 by the paper's probe (cd, {cfg['cd_sample']} contacts per packing of "
+                   f"N <= {cfg['cd_max_n']}) beside the stand-in (lp) on the same contacts", fig3x)]
+                 if exact else []),
                *([(f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
                  if "fig4" not in skip else [])]
     return stages, figures

@@ -255,6 +255,12 @@ class ExperimentTiny(unittest.TestCase):
         self.assertIn("--cd-start interior", report)
         self.assertIn("the path from an interior-point iterate", report)
         self.assertIn("| 1 | 100 | 1 | 3 | 0 | 0 | ", report)
+        # Fig. 3 by both probes, drawn from exact-probe.csv and listed in the report
+        self.assertEqual(res["plot fig3 exact"], "ran")
+        with open(os.path.join(self.out, "fig3-exact-vs-lp.png"), "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        self.assertIn("(lp) on the same contacts: [fig3-exact-vs-lp.png](fig3-exact-vs-lp.png)",
+                      report)
 
     def test_9b_exact_probe_within_a_budget_of_pieces(self):
         # --cd-max-pieces 2: the exact stages run again with the budget (their command

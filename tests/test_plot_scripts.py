@@ -404,6 +404,45 @@ class PlotScriptsTest(unittest.TestCase):
         self.assert_user_error(self.run_script("plot_friction_sweep.py", bad), bad, "line 2",
                                "fields")
 
+    # --- plot_exact_sweep.py
+
+    def exact_table(self):
+        """Two seeds at N = 500 and one at N = 1000 (its alpha by lp: a failed fit, empty)."""
+        path = os.path.join(self.tmp, "exact-probe.csv")
+        write_csv(path, ["mu", "N", "seed", "probes", "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd",
+                         "alpha_lp", "alpha_cd"],
+                  [(0, 500, 1, 300, 1.0, 1.02, 0.3, 0.3), (0, 500, 2, 300, 1.0, 1.0, 0.2, 0.24),
+                   (0.1, 500, 1, 300, 2.1, 2.0, 1.1, 0.9), (0.1, 500, 2, 300, 2.1, 1.9, 1.1, 0.8),
+                   (0.1, 1000, 1, 300, 2.3, 2.1, "", 0.9)])
+        return path
+
+    def test_exact_sweep(self):
+        table = self.exact_table()
+        out = os.path.join(self.tmp, "exact-sweep.png")
+        self.assert_ok(self.run_script("plot_exact_sweep.py", table, "--out", out))
+        self.assert_png(out)
+        # what is drawn: the lines through the means over the seeds, per N and method
+        sys.path.insert(0, SCRIPTS)
+        import plot_exact_sweep
+        fig = plot_exact_sweep.friction_figure(plot_exact_sweep.read_table(table))
+        lines = {(i, ln.get_label()): (list(ln.get_xdata()), list(ln.get_ydata()))
+                 for i, ax in enumerate(fig.axes) for ln in ax.get_lines()}
+        self.assertEqual(lines[(0, "cd, N = 500")], ([0.0, 0.1], [1.01, 1.95]))
+        self.assertEqual(lines[(0, "lp, N = 500")], ([0.0, 0.1], [1.0, 2.1]))
+        self.assertEqual(lines[(1, "cd, N = 500")], ([0.0, 0.1], [0.27, 0.8500000000000001]))
+        self.assertEqual(lines[(0, "cd, N = 1000")], ([0.1], [2.1]))
+        self.assertNotIn((1, "lp, N = 1000"), lines)  # no alpha by lp at N = 1000: not drawn
+
+    def test_exact_sweep_errors(self):
+        missing = os.path.join(self.tmp, "no-such-exact.csv")
+        self.assert_user_error(self.run_script("plot_exact_sweep.py", missing), missing, "not found")
+        bad = os.path.join(self.tmp, "bad-exact.csv")
+        write_csv(bad, ["mu", "N", "seed", "F_crit_over_F_cont_lp"], [(0.1, 500, 1, 2.0)])
+        self.assert_user_error(self.run_script("plot_exact_sweep.py", bad), bad, "F_crit_over_F_cont_cd")
+        write_csv(bad, ["mu", "N", "seed", "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd"],
+                  [(0.1, 0, 1, 2.0, 1.9)])
+        self.assert_user_error(self.run_script("plot_exact_sweep.py", bad), bad, "N must be a positive integer")
+
 
 if __name__ == "__main__":
     unittest.main()
