@@ -277,7 +277,7 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"probe " + fixture.string() + " --contact 1 --cd-start lp --out " + out.string(), "the cd start 'lp' applies to the cd method only (the method is lp)"},
       {"probe " + fixture.string() + " --sample 3 --max-inertia 1e-3 --out " + out.string(), "a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp"},
       {"probe " + fixture.string() + " --sample 3 --method cd --max-inertia -1 --out " + out.string(), "must be a finite number > 0"},
-      {"probe " + fixture.string() + " --contact 1 --method cd --cd-softer-starts 1 --out " + out.string(), "--cd-softer-starts applies to the cd method's compliant start only"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-softer-starts 1 --out " + out.string(), "--cd-softer-starts applies to the cd method's compliant and interior starts only"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-start compliant --cd-softer-starts -1 --out " + out.string(), "must be a finite number >= 0"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-compliant-start 1e-3 --out " + out.string(), "--cd-compliant-start applies to the cd method's compliant and interior starts only"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-start compliant --cd-compliant-start 0 --out " + out.string(), "must be a finite number > 0"},

@@ -632,7 +632,8 @@ void add_probe_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option(
       "--cd-softer-starts", o->cd.softer_starts,
-      "cd, compliant start: where the continuation ends without an exact solution, follow it again from 10x "
+      "cd, compliant and interior starts: where the continuation (the interior start's fallback) ends without an "
+      "exact solution, follow it again from 10x "
       "and then 100x ... its starting compliance, this many times (0: one start; docs/probe.md, \"Where the path "
       "starts\")")
       ->capture_default_str()

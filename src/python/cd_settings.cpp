@@ -91,7 +91,7 @@ void bind_cd_settings(py::module_& m) {
                 "the compliance of the compliant continuation's first path, > 0 (--cd-compliant-start; "
                 "docs/probe.md, \"Where the continuation starts\")");
   checked_field(c, "softer_starts", &CdPathSettings::softer_starts,
-                "the compliant start's softer starts, >= 0 (--cd-softer-starts)");
+                "the continuation's softer starts (compliant and interior starts), >= 0 (--cd-softer-starts)");
   checked_field(c, "max_pieces", &CdPathSettings::max_probe_pieces,
                 "a probe's budget of pieces over all its paths, >= 0 (0: none; --cd-max-pieces; "
                 "docs/probe.md, \"A budget of pieces per probe\")");

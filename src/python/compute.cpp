@@ -357,7 +357,7 @@ void bind_compute(py::module_& m) {
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
         "cd_start: where the cd method's path starts, 'static', 'compliant', 'lp' or 'interior' "
         "(`unjam probe --cd-start`; docs/probe.md, \"Where the path starts\"); cd_softer_starts: "
-        "the compliant start's softer starts (`unjam probe --cd-softer-starts`); window: lemke, cd: "
+        "the continuation's softer starts, compliant and interior starts (`unjam probe --cd-softer-starts`); window: lemke, cd: "
         "the step on the grains within this many mean diameters of the probed pair, the others clamped "
         "to the cell, not the paper's probe (`unjam probe --window`; docs/probe.md, \"A window around "
         "the probed pair\"); None: the whole packing; cd_max_pieces: cd: stop a probe after this many pieces "

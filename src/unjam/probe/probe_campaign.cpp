@@ -247,9 +247,8 @@ void validate(const CampaignSettings& s) {
   if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
     throw Error("a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp");
   validate(s.cd);
-  if (s.cd.softer_starts != CdPathSettings{}.softer_starts &&
-      !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant))
-    throw Error("--cd-softer-starts applies to the cd method's compliant start only");
+  if (s.cd.softer_starts != CdPathSettings{}.softer_starts && !has_continuation(s))
+    throw Error("--cd-softer-starts applies to the cd method's compliant and interior starts only");
   if (s.cd.compliant_start != CdPathSettings{}.compliant_start && !has_continuation(s))
     throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
