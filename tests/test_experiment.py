@@ -220,19 +220,26 @@ class ExperimentTiny(unittest.TestCase):
         with open(merged) as f, open(os.path.join(self.out, "sweep.csv")) as g:
             self.assertEqual(f.read(), g.read())
 
-    def test_9_exact_probe_beside_lp(self):
-        # --cd-sample 3: the exact probe and lp on the same 3 contacts of every packing, the
-        # sweep's own stages cached (--probe-g as left by test_4); exact-probe.csv holds the
-        # two summaries' numbers and the report shows them side by side.
-        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3"))
-        exact = {k for k, v in res.items() if k.startswith("exact ")}
-        self.assertEqual(exact, {f"exact N100-mu{mu}-s1" for mu in ("0", "0.1", "1")})
-        self.assertTrue(all(res[k] == "ran" for k in exact | {"table exact"}), res)
+    def run_exact_stages(self, *extra):
+        """The experiment again with --cd-sample 3 and `extra`: every exact stage ran, the sweep's
+        own stages cached; (stage outcomes, exact-probe.csv's rows by mu)."""
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3", *extra))
+        self.assertTrue(all(res[k] == "ran" for k in res if k.startswith("exact ")), res)
         self.assertTrue(all(res[k] == "cached" for k in res if k.startswith(("pack ", "probe "))),
                         res)
         with open(os.path.join(self.out, "exact-probe.csv")) as f:
             rows = {r["mu"]: r for r in csv.DictReader(f)}
         self.assertEqual(set(rows), {"0", "0.1", "1"})
+        return res, rows
+
+    def test_9_exact_probe_beside_lp(self):
+        # --cd-sample 3: the exact probe and lp on the same 3 contacts of every packing, the
+        # sweep's own stages cached (--probe-g as left by test_4); exact-probe.csv holds the
+        # two summaries' numbers and the report shows them side by side.
+        res, rows = self.run_exact_stages()
+        exact = {k for k, v in res.items() if k.startswith("exact ")}
+        self.assertEqual(exact, {f"exact N100-mu{mu}-s1" for mu in ("0", "0.1", "1")})
+        self.assertEqual(res["table exact"], "ran")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1")
             for m in ("cd", "lp"):
@@ -269,10 +276,7 @@ class ExperimentTiny(unittest.TestCase):
         # 35 (stopped), at mu = 0 none (the interior-point method solves the frictionless step);
         # the stopped probes are counted in exact-probe.csv and in the report, which names the
         # budget.
-        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3", "--cd-max-pieces", "2"))
-        self.assertTrue(all(res[k] == "ran" for k in res if k.startswith("exact ")), res)
-        with open(os.path.join(self.out, "exact-probe.csv")) as f:
-            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        _, rows = self.run_exact_stages("--cd-max-pieces", "2")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
             with open(os.path.join(d, "probe_summary.json")) as f:
@@ -296,14 +300,7 @@ class ExperimentTiny(unittest.TestCase):
         # summary's settings), the budget of test_9b is gone from the command (so its stages run
         # again), the accepted probes are counted in exact-probe.csv as in the summary, and the
         # report names both options.
-        res = outcomes(run(self.out, "--probe-g", "2e-9", "--cd-sample", "3",
-                           "--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3"))
-        self.assertTrue(all(res[k] == "ran" for k in res if k.startswith("exact ")), res)
-        self.assertTrue(all(res[k] == "cached" for k in res if k.startswith(("pack ", "probe "))),
-                        res)
-        with open(os.path.join(self.out, "exact-probe.csv")) as f:
-            rows = {r["mu"]: r for r in csv.DictReader(f)}
-        self.assertEqual(set(rows), {"0", "0.1", "1"})
+        res, rows = self.run_exact_stages("--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
             with open(os.path.join(d, "probe_summary.json")) as f:

@@ -6,9 +6,14 @@
 // ProbeSettings::cancel inside the running probes).
 #include <atomic>
 #include <chrono>
+#include <string>
 #include <thread>
 
 #include <pybind11/pybind11.h>
+
+namespace unjam {
+struct CdPathSettings;
+}
 
 namespace unjam::python {
 
@@ -17,6 +22,11 @@ namespace py = pybind11;
 void bind_packing(py::module_& m);
 void bind_compute(py::module_& m);
 void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute (its default)
+// The cd method's settings from the values of unjam.CdSettings' fields (and of unjam.probe's
+// cd_* keywords), unchecked: validate(CdPathSettings) checks them.
+CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
+                           double accept_residual, double interior_states_pieces, int interior_states_stall,
+                           int interior_states_retries, int interior_iterations, double interior_neighbourhood);
 
 // A should_stop hook: from the calling thread only, at most every 0.1 s, it takes the GIL
 // and runs PyErr_CheckSignals; after a KeyboardInterrupt (or any error a handler raised)

@@ -51,6 +51,23 @@ bool same(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == 
 
 }  // namespace
 
+CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
+                           double accept_residual, double interior_states_pieces, int interior_states_stall,
+                           int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
+  CdPathSettings s;
+  s.start = cd_start_from_name(start);
+  s.compliant_start = compliant_start;
+  s.softer_starts = softer_starts;
+  s.max_probe_pieces = max_pieces;
+  s.accept_residual = accept_residual;
+  s.interior_states_pieces = interior_states_pieces;
+  s.interior_states_stall = interior_states_stall;
+  s.interior_states_retries = interior_states_retries;
+  s.interior_max_iterations = interior_iterations;
+  s.interior_neighbourhood = interior_neighbourhood;
+  return s;
+}
+
 void bind_cd_settings(py::module_& m) {
   const CdPathSettings d;
   Class c(m, "CdSettings",
@@ -60,17 +77,9 @@ void bind_cd_settings(py::module_& m) {
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
-          CdPathSettings s;
-          s.start = cd_start_from_name(start);
-          s.compliant_start = compliant_start;
-          s.softer_starts = softer_starts;
-          s.max_probe_pieces = max_pieces;
-          s.accept_residual = accept_residual;
-          s.interior_states_pieces = interior_states_pieces;
-          s.interior_states_stall = interior_states_stall;
-          s.interior_states_retries = interior_states_retries;
-          s.interior_max_iterations = interior_iterations;
-          s.interior_neighbourhood = interior_neighbourhood;
+          const CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
+                                               interior_states_pieces, interior_states_stall, interior_states_retries,
+                                               interior_iterations, interior_neighbourhood);
           validate(s);
           return s;
         }),

@@ -162,24 +162,16 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
                  double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
-                 std::optional<CdPathSettings> cd_settings, int threads) {
+                 std::optional<CdPathSettings> typed, int threads) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
-  CdPathSettings cd;
-  cd.start = cd_start_from_name(cd_start);
-  cd.softer_starts = cd_softer_starts;
-  cd.max_probe_pieces = cd_max_pieces;
-  cd.interior_states_pieces = cd_interior_states_pieces;
-  cd.interior_states_stall = cd_interior_states_stall;
-  cd.interior_states_retries = cd_interior_states_retries;
-  cd.interior_max_iterations = cd_interior_iterations;
-  cd.interior_neighbourhood = cd_interior_neighbourhood;
-  cd.compliant_start = cd_compliant_start;
-  cd.accept_residual = cd_accept_residual;
-  if (cd_settings) {  // cd=unjam.CdSettings(...): the keywords must then be left at their defaults
+  CdPathSettings cd = cd_settings(cd_start, cd_compliant_start, cd_softer_starts, cd_max_pieces, cd_accept_residual,
+                                  cd_interior_states_pieces, cd_interior_states_stall, cd_interior_states_retries,
+                                  cd_interior_iterations, cd_interior_neighbourhood);
+  if (typed) {  // cd=unjam.CdSettings(...): the keywords must then be left at their defaults
     if (!same_cd_keywords(cd, CdPathSettings{}))
       throw Error("give the cd settings either as cd=unjam.CdSettings(...) or as cd_* keywords, not both");
-    cd = *cd_settings;
+    cd = *typed;
   }
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window);
   std::vector<ProbeResult> results;
