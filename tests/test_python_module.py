@@ -8,6 +8,7 @@ import copy
 import csv
 import json
 import os
+import pickle
 import re
 import signal
 import subprocess
@@ -343,6 +344,7 @@ def test_the_cd_settings_are_one_typed_object():
     assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
                               "max_pieces=0, accept_residual=0.0001, ")
     assert eval("unjam." + repr(s)) == s and copy.deepcopy(s) == s
+    assert pickle.loads(pickle.dumps(s)) == s and pickle.loads(pickle.dumps(d)) == d
     for field, value, message in [("accept_residual", 1e-2, r"--cd-accept-residual must be in \[1e-06"),
                                   ("compliant_start", 0.0, "--cd-compliant-start must be positive"),
                                   ("compliant_start", float("inf"), "--cd-compliant-start must be positive"),

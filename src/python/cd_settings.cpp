@@ -127,6 +127,33 @@ void bind_cd_settings(py::module_& m) {
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });
   c.def("__deepcopy__", [](const CdPathSettings& s, py::dict) { return s; }, py::arg("memo"));
+  // pickle (multiprocessing, saving a configuration): the fields of repr as a dict by name, read
+  // back through the checked constructor's arguments.
+  c.def(py::pickle(
+      [](const CdPathSettings& s) {
+        py::dict d;
+        d["start"] = std::string(cd_start_name(s.start));
+        d["compliant_start"] = s.compliant_start;
+        d["softer_starts"] = s.softer_starts;
+        d["max_pieces"] = s.max_probe_pieces;
+        d["accept_residual"] = s.accept_residual;
+        d["interior_states_pieces"] = s.interior_states_pieces;
+        d["interior_states_stall"] = s.interior_states_stall;
+        d["interior_states_retries"] = s.interior_states_retries;
+        d["interior_iterations"] = s.interior_max_iterations;
+        d["interior_neighbourhood"] = s.interior_neighbourhood;
+        return d;
+      },
+      [](const py::dict& d) {
+        const CdPathSettings s = cd_settings(
+            d["start"].cast<std::string>(), d["compliant_start"].cast<double>(), d["softer_starts"].cast<int>(),
+            d["max_pieces"].cast<long long>(), d["accept_residual"].cast<double>(),
+            d["interior_states_pieces"].cast<double>(), d["interior_states_stall"].cast<int>(),
+            d["interior_states_retries"].cast<int>(), d["interior_iterations"].cast<int>(),
+            d["interior_neighbourhood"].cast<double>());
+        validate(s);
+        return s;
+      }));
 }
 
 }  // namespace unjam::python
