@@ -345,6 +345,10 @@ def test_the_cd_settings_are_one_typed_object():
                               "max_pieces=0, accept_residual=0.0001, ")
     assert eval("unjam." + repr(s)) == s and copy.deepcopy(s) == s
     assert pickle.loads(pickle.dumps(s)) == s and pickle.loads(pickle.dumps(d)) == d
+    state = s.__getstate__()  # a damaged pickle is refused as a bad assignment is
+    state["accept_residual"] = 1e-2
+    with pytest.raises(unjam.Error, match=r"--cd-accept-residual must be in"):
+        unjam.CdSettings.__new__(unjam.CdSettings).__setstate__(state)
     for field, value, message in [("accept_residual", 1e-2, r"--cd-accept-residual must be in \[1e-06"),
                                   ("compliant_start", 0.0, "--cd-compliant-start must be positive"),
                                   ("compliant_start", float("inf"), "--cd-compliant-start must be positive"),

@@ -30,23 +30,36 @@ void checked_field(Class& c, const char* name, T CdPathSettings::*member, const 
       doc);
 }
 
-// A number as Python writes it (the shortest text that reads back the same).
-std::string number(double v) { return py::repr(py::float_(v)).cast<std::string>(); }
+// The fields CdSettings shows, by name in the constructor's order: its repr, its pickled
+// state and what == compares.
+py::dict fields(const CdPathSettings& s) {
+  py::dict d;
+  d["start"] = std::string(cd_start_name(s.start));
+  d["compliant_start"] = s.compliant_start;
+  d["softer_starts"] = s.softer_starts;
+  d["max_pieces"] = s.max_probe_pieces;
+  d["accept_residual"] = s.accept_residual;
+  d["interior_states_pieces"] = s.interior_states_pieces;
+  d["interior_states_stall"] = s.interior_states_stall;
+  d["interior_states_retries"] = s.interior_states_retries;
+  d["interior_iterations"] = s.interior_max_iterations;
+  d["interior_neighbourhood"] = s.interior_neighbourhood;
+  return d;
+}
 
+// CdSettings(start='static', compliant_start=0.1, ...): each value as Python writes it.
 std::string repr(const CdPathSettings& s) {
   std::ostringstream o;
-  o << "CdSettings(start='" << cd_start_name(s.start) << "', compliant_start=" << number(s.compliant_start)
-    << ", softer_starts=" << s.softer_starts << ", max_pieces=" << s.max_probe_pieces
-    << ", accept_residual=" << number(s.accept_residual)
-    << ", interior_states_pieces=" << number(s.interior_states_pieces)
-    << ", interior_states_stall=" << s.interior_states_stall
-    << ", interior_states_retries=" << s.interior_states_retries
-    << ", interior_iterations=" << s.interior_max_iterations
-    << ", interior_neighbourhood=" << number(s.interior_neighbourhood) << ")";
+  o << "CdSettings(";
+  const char* sep = "";
+  for (const auto& [name, value] : fields(s)) {
+    o << sep << name.cast<std::string>() << "=" << py::repr(value).cast<std::string>();
+    sep = ", ";
+  }
+  o << ")";
   return o.str();
 }
 
-// The fields CdSettings shows (and compares): those of repr.
 bool same(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == repr(b); }
 
 }  // namespace
@@ -128,32 +141,10 @@ void bind_cd_settings(py::module_& m) {
   c.def("__copy__", [](const CdPathSettings& s) { return s; });
   c.def("__deepcopy__", [](const CdPathSettings& s, py::dict) { return s; }, py::arg("memo"));
   // pickle (multiprocessing, saving a configuration): the fields of repr as a dict by name, read
-  // back through the checked constructor's arguments.
+  // back by the checked constructor.
   c.def(py::pickle(
-      [](const CdPathSettings& s) {
-        py::dict d;
-        d["start"] = std::string(cd_start_name(s.start));
-        d["compliant_start"] = s.compliant_start;
-        d["softer_starts"] = s.softer_starts;
-        d["max_pieces"] = s.max_probe_pieces;
-        d["accept_residual"] = s.accept_residual;
-        d["interior_states_pieces"] = s.interior_states_pieces;
-        d["interior_states_stall"] = s.interior_states_stall;
-        d["interior_states_retries"] = s.interior_states_retries;
-        d["interior_iterations"] = s.interior_max_iterations;
-        d["interior_neighbourhood"] = s.interior_neighbourhood;
-        return d;
-      },
-      [](const py::dict& d) {
-        const CdPathSettings s = cd_settings(
-            d["start"].cast<std::string>(), d["compliant_start"].cast<double>(), d["softer_starts"].cast<int>(),
-            d["max_pieces"].cast<long long>(), d["accept_residual"].cast<double>(),
-            d["interior_states_pieces"].cast<double>(), d["interior_states_stall"].cast<int>(),
-            d["interior_states_retries"].cast<int>(), d["interior_iterations"].cast<int>(),
-            d["interior_neighbourhood"].cast<double>());
-        validate(s);
-        return s;
-      }));
+      [](const CdPathSettings& s) { return fields(s); },
+      [](const py::dict& d) { return py::type::of<CdPathSettings>()(**d).cast<CdPathSettings>(); }));
 }
 
 }  // namespace unjam::python
