@@ -17,8 +17,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                (the paper's Fig. 3b inset);
   exact        with --cd-sample K > 0 (300 at the paper scale), on the sweep's packings of at
                most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd
-               --cd-start interior` (--cd-start; --cd-max-pieces, --cd-accept-residual and
-               --cd-compliant-start passed on where given)
+               --cd-start interior` (--cd-start; --cd-max-pieces, --cd-accept-residual,
+               --cd-compliant-start and --cd-softer-starts passed on where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
@@ -114,6 +114,11 @@ def parse_args(argv):
                    "exact probe's continuation starts from, > 0 (`unjam probe "
                    "--cd-compliant-start`; default: unjam's; docs/probe.md, \"Where the "
                    "continuation starts\")")
+    p.add_argument("--cd-softer-starts", type=int, metavar="S", help="the continuation's softer "
+                   "starts, >= 0 (`unjam probe --cd-softer-starts`; default: unjam's; with the "
+                   "interior start, --cd-compliant-start 1e-4 --cd-softer-starts 5 costs no more "
+                   "and solves as many or more at every friction measured: docs/probe.md, \"At a "
+                   "glance\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -147,6 +152,8 @@ def parse_args(argv):
     if args.cd_compliant_start is not None and not (math.isfinite(args.cd_compliant_start)
                                                     and args.cd_compliant_start > 0):
         p.error(f"--cd-compliant-start must be a finite number > 0, got {args.cd_compliant_start}")
+    if args.cd_softer_starts is not None and args.cd_softer_starts < 0:
+        p.error(f"--cd-softer-starts must be >= 0, got {args.cd_softer_starts}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -169,7 +176,8 @@ def main(argv=None):
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
-              "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start"):
+              "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start",
+              "cd_softer_starts"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

@@ -37,9 +37,11 @@ PY = sys.executable or "/usr/bin/python3"
 # within this residual, in g (`unjam probe --cd-accept-residual`; 0: unjam's default, only an
 # exact solution stops it; docs/probe.md, "Accepting a near-exact solution").
 # cd_compliant_start: the compliance the continuation starts from (`unjam probe
-# --cd-compliant-start`; 0: unjam's default; docs/probe.md, "Where the continuation starts").
-# Both are passed to unjam only where set, so stages cached without them stay valid.
-CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0}
+# --cd-compliant-start`; 0: unjam's default; docs/probe.md, "Where the continuation starts");
+# cd_softer_starts: its softer starts (`unjam probe --cd-softer-starts`; -1: unjam's default).
+# They are passed to unjam only where set, so stages cached without them stay valid.
+CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0,
+               "cd_softer_starts": -1}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
              "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
@@ -153,9 +155,11 @@ def cd_options(cfg):
     args = []
     for key, flag in (("cd_max_pieces", "--cd-max-pieces"),
                       ("cd_accept_residual", "--cd-accept-residual"),
-                      ("cd_compliant_start", "--cd-compliant-start")):
-        if cfg.get(key, 0) > 0:
-            args += [flag, str(cfg[key]) if isinstance(cfg[key], int) else repr(cfg[key])]
+                      ("cd_compliant_start", "--cd-compliant-start"),
+                      ("cd_softer_starts", "--cd-softer-starts")):
+        value = cfg.get(key, CD_DEFAULTS[key])
+        if value != CD_DEFAULTS[key]:
+            args += [flag, str(value) if isinstance(value, int) else repr(value)]
     return args
 
 

@@ -300,13 +300,15 @@ class ExperimentTiny(unittest.TestCase):
         # summary's settings), the budget of test_9b is gone from the command (so its stages run
         # again), the accepted probes are counted in exact-probe.csv as in the summary, and the
         # report names both options.
-        res, rows = self.run_exact_stages("--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3")
+        res, rows = self.run_exact_stages("--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3",
+                                          "--cd-softer-starts", "0")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
             with open(os.path.join(d, "probe_summary.json")) as f:
                 s = json.load(f)
             self.assertEqual(s["settings"]["cd_accept_residual"], 1e-4)
             self.assertEqual(s["settings"]["cd_compliant_start"], 1e-3)
+            self.assertNotIn("cd_softer_starts", s["settings"])  # 0: one start, recorded where on
             self.assertNotIn("over_budget", s)
             self.assertEqual(int(r["accepted"]), s["accepted"]["probes"], mu)
             with open(os.path.join(d, "probes.csv")) as f:
@@ -317,11 +319,12 @@ class ExperimentTiny(unittest.TestCase):
             self.assertTrue(all(float(p["residual"]) <= 1e-4 for p in near), (mu, near))
         with open(os.path.join(self.out, "report.md")) as f:
             report = f.read()
-        self.assertIn("--cd-accept-residual 0.0001, --cd-compliant-start 0.001", report)
+        self.assertIn("--cd-accept-residual 0.0001, --cd-compliant-start 0.001, --cd-softer-starts 0",
+                      report)
         self.assertIn("| near-exact, accepted |", report)
         self.assertNotIn("--cd-max-pieces 2", report)
         self.assertIn("--cd-start interior --cd-accept-residual 0.0001 --cd-compliant-start 0.001 "
-                      "(and lp)", report)  # the stages' own lines in the timings
+                      "--cd-softer-starts 0 (and lp)", report)  # the stages' own lines in the timings
 
 
 class ExactProbeTable(unittest.TestCase):
@@ -380,7 +383,8 @@ class ExperimentArguments(unittest.TestCase):
                                   (["--cd-accept-residual", "1e-2"], "--cd-accept-residual"),
                                   (["--cd-accept-residual", "nan"], "--cd-accept-residual"),
                                   (["--cd-compliant-start", "0"], "--cd-compliant-start"),
-                                  (["--cd-compliant-start", "inf"], "--cd-compliant-start")]:
+                                  (["--cd-compliant-start", "inf"], "--cd-compliant-start"),
+                                  (["--cd-softer-starts", "-1"], "--cd-softer-starts")]:
                 p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out,
                                     "--unjam", UNJAM, *extra],
                                    capture_output=True, text=True, cwd=REPO, timeout=60)
