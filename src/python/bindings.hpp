@@ -27,6 +27,8 @@ void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
                            int interior_states_retries, int interior_iterations, double interior_neighbourhood);
+// a and b equal in the fields unjam.CdSettings shows (those the cd_* keywords of unjam.probe set).
+bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b);
 
 // A should_stop hook: from the calling thread only, at most every 0.1 s, it takes the GIL
 // and runs PyErr_CheckSignals; after a KeyboardInterrupt (or any error a handler raised)

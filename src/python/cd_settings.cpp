@@ -60,9 +60,9 @@ std::string repr(const CdPathSettings& s) {
   return o.str();
 }
 
-bool same(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == repr(b); }
-
 }  // namespace
+
+bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == repr(b); }
 
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
@@ -137,7 +137,7 @@ void bind_cd_settings(py::module_& m) {
                 "interior start: the wide neighbourhood of a second interior-point run, in [0, 1) (0: none; "
                 "--cd-interior-neighbourhood)");
   c.def("__repr__", &repr);
-  c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same(a, b); }, py::is_operator());
+  c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });
   c.def("__deepcopy__", [](const CdPathSettings& s, py::dict) { return s; }, py::arg("memo"));
   // pickle (multiprocessing, saving a configuration): the fields of repr as a dict by name, read

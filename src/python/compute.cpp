@@ -143,16 +143,6 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
   return s;
 }
 
-// The fields the cd_* keywords of unjam.probe set, equal in a and b.
-bool same_cd_keywords(const CdPathSettings& a, const CdPathSettings& b) {
-  return a.start == b.start && a.softer_starts == b.softer_starts && a.max_probe_pieces == b.max_probe_pieces &&
-         a.interior_states_pieces == b.interior_states_pieces && a.interior_states_stall == b.interior_states_stall &&
-         a.interior_states_retries == b.interior_states_retries &&
-         a.interior_max_iterations == b.interior_max_iterations &&
-         a.interior_neighbourhood == b.interior_neighbourhood && a.compliant_start == b.compliant_start &&
-         a.accept_residual == b.accept_residual;
-}
-
 // probe_contacts (in parallel; Ctrl-C checked between probes and, by the calling thread's
 // probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
 // in the order of contacts=[...].
@@ -169,7 +159,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                                   cd_interior_states_pieces, cd_interior_states_stall, cd_interior_states_retries,
                                   cd_interior_iterations, cd_interior_neighbourhood);
   if (typed) {  // cd=unjam.CdSettings(...): the keywords must then be left at their defaults
-    if (!same_cd_keywords(cd, CdPathSettings{}))
+    if (!same_cd_fields(cd, CdPathSettings{}))
       throw Error("give the cd settings either as cd=unjam.CdSettings(...) or as cd_* keywords, not both");
     cd = *typed;
   }
