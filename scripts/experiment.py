@@ -115,10 +115,8 @@ def parse_args(argv):
                    "--cd-compliant-start`; default: unjam's; docs/probe.md, \"Where the "
                    "continuation starts\")")
     p.add_argument("--cd-softer-starts", type=int, metavar="S", help="the continuation's softer "
-                   "starts, >= 0 (`unjam probe --cd-softer-starts`; default: unjam's; with the "
-                   "interior start, --cd-compliant-start 1e-4 --cd-softer-starts 5 costs no more "
-                   "and solves as many or more at every friction measured: docs/probe.md, \"At a "
-                   "glance\")")
+                   "starts, >= 0 (`unjam probe --cd-softer-starts`; default: unjam's; which "
+                   "settings pay at which friction: docs/probe.md, \"At a glance\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
