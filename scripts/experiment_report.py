@@ -131,6 +131,11 @@ def exact_probe_section(path, start):
     return L
 
 
+def pairs(args):
+    """[flag, value, flag, value, ...] -> [(flag, value), ...]."""
+    return list(zip(args[::2], args[1::2]))
+
+
 def write_report(path, args, cfg, R, figures, command):
     """OUT/report.md from OUT/sweep.csv and OUT/fixed.csv; command: the experiment's command
     line (a list)."""
@@ -178,8 +183,7 @@ def write_report(path, args, cfg, R, figures, command):
           f"- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
              f"--cd-start {cfg['cd_start']}"
-             + "".join(f", {flag} {value}" for flag, value in
-                       zip(cd_options(cfg)[::2], cd_options(cfg)[1::2]))
+             + "".join(f", {flag} {value}" for flag, value in pairs(cd_options(cfg)))
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

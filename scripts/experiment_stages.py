@@ -180,8 +180,9 @@ def exact_probe_stage(R, name, d, g, sample, start, dep, cd_args):
                 remove_probe_outputs(outs[m])
             if not probe_done(outs[m]):
                 R.call(st, R.unjam_cmd("probe", d, *args[m], "--out", outs[m], "--quiet", mpi=True))
-    return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
-                 f"--cd-start {' '.join([start] + list(cd_args))} (and lp)", os.path.join(d, "stage.json"), params, run,
+    what = " ".join([f"unjam probe {os.path.relpath(d, R.out)} --sample {sample} --method cd "
+                     f"--cd-start {start}", *cd_args, "(and lp)"])
+    return Stage(name, what, os.path.join(d, "stage.json"), params, run,
                  lambda: all(probe_done(o) for o in outs.values()), [dep])
 
 

@@ -72,10 +72,9 @@ def friction_figure(pairs, title=None):
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
     axes[0].axhline(1.0, color="0.4", linewidth=0.8)
-    axes[1].axhspan(*PAPER_ALPHA, color="0.85", zorder=0, label="the paper's range")
+    band = axes[1].axhspan(*PAPER_ALPHA, color="0.85", zorder=0, label="the paper's range")
     axes[0].legend(fontsize=8)
-    axes[1].legend(handles=[h for h in axes[1].get_legend_handles_labels()[0]
-                            if h.get_label() == "the paper's range"], fontsize=8)
+    axes[1].legend(handles=[band], fontsize=8)
     axes[0].set_title(title or "lp (open, dashed) and cd (filled, solid) on the same contacts",
                       fontsize=9)
     fig.tight_layout()

@@ -62,7 +62,7 @@ std::string repr(const CdPathSettings& s) {
 
 }  // namespace
 
-bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return repr(a) == repr(b); }
+bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return fields(a).equal(fields(b)); }
 
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,

@@ -111,10 +111,11 @@ struct CdPathSettings {
   int max_restarts = 6;
   // CdPathStart::compliant (and the interior start's fallback): where the continuation from
   // compliant_start (with its restarts) ends without an exact solution, it is followed again
-  // from softer_factor times that compliance, up to softer_starts times (the lowest residual over all paths is kept), and
-  // a start's restarts end once two in a row stop short of the full opening at the same
-  // lambda_max / compliance (the ones below would repeat them scaled). 0: one start, and
-  // every restart followed; none without `retry` (docs/probe.md, "Where the path starts").
+  // from softer_factor times that compliance, up to softer_starts times (the lowest residual
+  // over all paths is kept), and a start's restarts end once two in a row stop short of the
+  // full opening at the same lambda_max / compliance (the ones below would repeat them
+  // scaled). 0: one start, and every restart followed; none without `retry` (docs/probe.md,
+  // "Where the path starts").
   int softer_starts = 2;
   double softer_factor = 10.0;
   // The pieces one probe may take over all its paths (the first, the proximal paths of its
