@@ -28,6 +28,11 @@ compare-probes):
                     summaries), label, probes (contacts probed by both), exact, solved,
                     F_crit_over_F_cont_lp and F_crit_over_F_cont_cd (sum of f_crit over the
                     solved contacts / sum of their f_cont, both methods on the same contacts),
+                    F_crit_over_F_cont_lp_all (the lp mean over every shared contact, solved
+                    or not: with the one over the solved, how much leaving the unsolved out
+                    moves the stand-in's mean), F_crit_over_F_cont_lp_exact and
+                    F_crit_over_F_cont_cd_exact (both means over the exact contacts only:
+                    with the ones over the solved, how much the near-exact probes move them),
                     ratio_median, ratio_q1, ratio_q3 (quartiles: statistics.quantiles, n=4),
                     ratio_min, ratio_max, alpha_lp, alpha_lp_err, alpha_cd, alpha_cd_err (the
                     power-law fits of each probe_summary.json; empty where a fit failed),
@@ -45,7 +50,8 @@ compare-probes):
                     residual_cd, exact (0/1), solved (0/1), f_inertia_cd (in F0; empty
                     where it is not recorded), inertial (0/1)
   OUT/compare.md    the per-pair table in Markdown, with the command that made it and the
-                    program version of the campaigns
+                    program version of the campaigns, and a second table of both means over
+                    every probe, the solved ones and the exact ones
   OUT/compare.json  the command, the campaigns (directories, commands, program versions),
                     the rules and the per-pair numbers (NaN as null)
   OUT/ratio-distribution.png
@@ -92,7 +98,9 @@ COMPARE_COLUMNS = ["packing", "mu", "N", "seed", "label", "probes", "exact", "so
                    "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd", "ratio_median", "ratio_q1",
                    "ratio_q3", "ratio_min", "ratio_max", "alpha_lp", "alpha_lp_err", "alpha_cd",
                    "alpha_cd_err", "pieces_median", "cpu_s_per_probe_cd", "inertial",
-                   "f_inertia_median_F0", "f_inertia_max_F0", "f_inertia_max_contact"]
+                   "f_inertia_median_F0", "f_inertia_max_F0", "f_inertia_max_contact",
+                   "F_crit_over_F_cont_lp_all", "F_crit_over_F_cont_lp_exact",
+                   "F_crit_over_F_cont_cd_exact"]
 RATIO_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "f_crit_lp", "f_crit_cd",
                  "ratio", "residual_cd", "exact", "solved", "f_inertia_cd", "inertial"]
 
@@ -259,6 +267,8 @@ def compare_pair(cd, lp, label):
                "N": s_cd.get("N"), "seed": s_cd.get("seed")}
     rows, ratios, no_lp, inertia = [], [], [], []
     sum_cont = sum_cd = sum_lp = 0.0
+    # The same sums over every shared contact (lp only) and over the exact ones.
+    all_cont = all_lp = exact_cont = exact_cd = exact_lp = 0.0
     n_exact = n_solved = n_inertial = 0
     line = max_inertia_F0(cd)
     F0 = _optional_number(cd, "F0")
@@ -292,6 +302,13 @@ def compare_pair(cd, lp, label):
                 ratios.append(ratio)
             else:
                 no_lp.append(k)
+        if math.isfinite(q["f_crit"]):
+            all_cont += r["f_cont"]
+            all_lp += q["f_crit"]
+        if exact and not inertial:
+            exact_cont += r["f_cont"]
+            exact_cd += r["f_crit"]
+            exact_lp += q["f_crit"]
         rows.append({**packing, "contact": k, "f_cont": r["f_cont"], "f_crit_lp": q["f_crit"],
                      "f_crit_cd": r["f_crit"], "ratio": ratio, "residual_cd": r["residual"],
                      "exact": int(exact), "solved": int(solved), "f_inertia_cd": f_inertia,
@@ -333,6 +350,9 @@ def compare_pair(cd, lp, label):
         "f_inertia_median_F0": statistics.median(v for v, _ in inertia) if inertia else math.nan,
         "f_inertia_max_F0": largest[0],
         "f_inertia_max_contact": largest[1],
+        "F_crit_over_F_cont_lp_all": all_lp / all_cont if all_cont > 0 else math.nan,
+        "F_crit_over_F_cont_lp_exact": exact_lp / exact_cont if exact_cont > 0 else math.nan,
+        "F_crit_over_F_cont_cd_exact": exact_cd / exact_cont if exact_cont > 0 else math.nan,
     }
     return numbers, rows, ratios
 
@@ -417,6 +437,16 @@ def table_cells(p):
             if math.isfinite(p["f_inertia_median_F0"]) else "–"]
 
 
+SELECTION_HEAD = ["pair", "lp, every probe", "lp, solved", "lp, exact", "cd, solved", "cd, exact"]
+
+
+def selection_cells(p):
+    """<F_crit>/<F_cont> of each method over the probes each mean takes."""
+    return [pair_name(p)] + [_fixed(p[k], 3) for k in (
+        "F_crit_over_F_cont_lp_all", "F_crit_over_F_cont_lp", "F_crit_over_F_cont_lp_exact",
+        "F_crit_over_F_cont_cd", "F_crit_over_F_cont_cd_exact")]
+
+
 def markdown(pairs, campaigns, command):
     versions = sorted({str(c["summary"].get("program_version", "unknown")) for c in campaigns})
     out = [f"Made by `{command}` from campaigns of unjam {', '.join(versions)}.", "",
@@ -435,6 +465,11 @@ def markdown(pairs, campaigns, command):
             f"f_inertia: the largest net force on a grain in the cd step, over the solved "
             f"contacts; inertial: solved contacts above the cd campaign's --max-inertia, left "
             f"out of the means and ratios as the campaign leaves them out.", ""]
+    out += ["Which probes the means take (the near-exact and unsolved probes' weight in them):", "",
+            "| " + " | ".join(SELECTION_HEAD) + " |",
+            "|" + "|".join("---" if i == 0 else "---:" for i in range(len(SELECTION_HEAD))) + "|"]
+    out += ["| " + " | ".join(selection_cells(p)) + " |" for p in pairs]
+    out.append("")
     for i, (p, (cd, lp)) in enumerate(zip(pairs, zip(campaigns[::2], campaigns[1::2])), 1):
         part = [f"{partial_count(c['summary'])} of the {m} campaign so far"
                 for m, c in (("cd", cd), ("lp", lp)) if partial_count(c["summary"])]

@@ -340,6 +340,16 @@ bool catches(pid_t pid, int sig) {
   return false;
 }
 
+// Whether the main thread of process `pid` blocks `sig` (/proc/PID/status, SigBlk): the tool
+// takes SIGINT and SIGTERM in a listening thread by sigwait, so that no handler runs inside
+// the computation (METIS installs its own for SIGTERM during its calls, core/nested_dissection).
+bool blocks(pid_t pid, int sig) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind("SigBlk:", 0) == 0) return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1ULL;
+  return false;
+}
+
 // SIGTERM in the middle of a long probe (nlgs, 6e5 sweeps that do not converge: seconds of
 // compute): the probe is abandoned at once, the run exits with the interrupt code 3 leaving a
 // checkpoint without it, and the same command again probes it: the probes.csv of an
@@ -371,6 +381,8 @@ TEST_F(CliReliability, SigtermAbandonsTheRunningProbeAndTheSameCommandRedoesIt) 
          std::chrono::steady_clock::now() - started < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_TRUE(blocks(pid, SIGTERM));
+  EXPECT_TRUE(blocks(pid, SIGINT));
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   const auto signalled = std::chrono::steady_clock::now();
   int status = 0;
@@ -391,6 +403,40 @@ TEST_F(CliReliability, SigtermAbandonsTheRunningProbeAndTheSameCommandRedoesIt) 
   EXPECT_FALSE(fs::exists(out / "probe_checkpoint.json"));
   EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
   EXPECT_EQ(read_file(out / "response_profile.csv"), read_file(whole / "response_profile.csv"));
+}
+
+// A command that saves no state to resume (`unjam ensemble`) is ended by SIGTERM as by the
+// signal's default action, though the tool takes the signal in its listening thread.
+TEST_F(CliReliability, SigtermEndsACommandWithoutAStateToSaveAsByDefault) {
+  const fs::path d = copy("p50-mu1", "d");
+  const fs::path log = root_ / "ensemble-log.txt";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c",
+            ("exec '" + std::string(UNJAM_BINARY) + "' ensemble " + d.string() +
+             " --method walk --samples 100000000 --probe none --threads 1 >'" + log.string() + "' 2>&1")
+                .c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  const auto started = std::chrono::steady_clock::now();
+  while (!blocks(pid, SIGTERM) && std::chrono::steady_clock::now() - started < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  int status = 0;
+  const auto signalled = std::chrono::steady_clock::now();
+  while (::waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() - signalled > std::chrono::seconds(30)) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      FAIL() << "SIGTERM did not end the command within 30 s";
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(WIFSIGNALED(status)) << read_file_or_empty(log);
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
 }
 
 TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {

@@ -129,7 +129,9 @@ def expected(cd_dir, lp_dir):
     fi = inertia_F0(cd_dir)
     sol = [k for k in shared if float(cd[k]["residual"]) <= 1e-3
            and not (line > 0 and fi[k] > line)]
+    exact = [k for k in sol if float(cd[k]["residual"]) <= 1e-6]
     f_cont = sum(float(cd[k]["f_cont"]) for k in sol)
+    f_cont_exact = sum(float(cd[k]["f_cont"]) for k in exact)
     ratios = [float(cd[k]["f_crit"]) / float(lp[k]["f_crit"]) for k in sol
               if float(lp[k]["f_crit"]) > 0]
     q1, _, q3 = statistics.quantiles(ratios, n=4)
@@ -139,7 +141,11 @@ def expected(cd_dir, lp_dir):
             "F_crit_over_F_cont_lp": sum(float(lp[k]["f_crit"]) for k in sol) / f_cont,
             "ratio_median": statistics.median(ratios), "ratio_q1": q1, "ratio_q3": q3,
             "ratio_min": min(ratios), "ratio_max": max(ratios),
-            "pieces_median": statistics.median(int(cd[k]["sweeps"]) for k in shared)}
+            "pieces_median": statistics.median(int(cd[k]["sweeps"]) for k in shared),
+            "F_crit_over_F_cont_lp_all": sum(float(lp[k]["f_crit"]) for k in shared)
+            / sum(float(cd[k]["f_cont"]) for k in shared),
+            "F_crit_over_F_cont_lp_exact": sum(float(lp[k]["f_crit"]) for k in exact) / f_cont_exact,
+            "F_crit_over_F_cont_cd_exact": sum(float(cd[k]["f_crit"]) for k in exact) / f_cont_exact}
 
 
 @requires_unjam
@@ -184,6 +190,11 @@ class ComparePairs(unittest.TestCase):
                                    s_cd["F_crit_over_F_cont"], delta=1e-9)
             self.assertAlmostEqual(float(row["F_crit_over_F_cont_lp"]),
                                    s_lp["F_crit_over_F_cont"], delta=1e-9)
+            # Every probe exact: the means over all, solved and exact probes are one.
+            for key in ("F_crit_over_F_cont_lp_all", "F_crit_over_F_cont_lp_exact"):
+                self.assertClose(float(row[key]), float(row["F_crit_over_F_cont_lp"]), key)
+            self.assertClose(float(row["F_crit_over_F_cont_cd_exact"]),
+                             float(row["F_crit_over_F_cont_cd"]))
             self.assertEqual(float(row["alpha_cd"]), s_cd["alpha"])
             self.assertEqual(float(row["alpha_lp_err"]), s_lp["alpha_err"])
             self.assertClose(float(row["cpu_s_per_probe_cd"]),
@@ -202,7 +213,9 @@ class ComparePairs(unittest.TestCase):
         self.assertIn("scripts/compare_probes.py", md.splitlines()[0])
         version = summary(R["cd"]["p50-mu1"])["program_version"]  # the campaigns' own
         self.assertIn(version, md.splitlines()[0])
-        self.assertEqual(sum(line.startswith("| mu = ") for line in md.splitlines()), 2)
+        # One row per pair in each of the two tables.
+        self.assertEqual(sum(line.startswith("| mu = ") for line in md.splitlines()), 4)
+        self.assertIn("| pair | lp, every probe | lp, solved | lp, exact | cd, solved | cd, exact |", md)
         with open(os.path.join(R["out"], "compare.json")) as f:
             record = json.load(f)
         self.assertIn("compare_probes.py", record["command"])
@@ -238,6 +251,13 @@ class ComparePairs(unittest.TestCase):
         self.assertEqual(row["label"], "edited")
         for key, value in e.items():
             self.assertClose(float(row[key]), float(value), key)
+        # The three selections differ: 12 probes, 11 solved, 10 exact.
+        lp_means = {row[k] for k in ("F_crit_over_F_cont_lp_all", "F_crit_over_F_cont_lp",
+                                     "F_crit_over_F_cont_lp_exact")}
+        self.assertEqual(len(lp_means), 3)
+        self.assertNotEqual(row["F_crit_over_F_cont_cd_exact"], row["F_crit_over_F_cont_cd"])
+        with open(os.path.join(out, "compare.md")) as f:
+            self.assertIn(f"| edited | {float(row['F_crit_over_F_cont_lp_all']):.3f} | ", f.read())
         ratios = {int(r["contact"]): r for r in read_rows(os.path.join(out, "ratios.csv"))}
         self.assertEqual(ratios[k_none]["ratio"], "")
         self.assertEqual(ratios[k_none]["solved"], "0")

@@ -1,8 +1,10 @@
 // The sparse factorisations' building blocks: METIS's nested dissection with dense rows last
 // (core/nested_dissection) and KLU with diagonal or partial pivoting (solver/klu_factor).
 #include <algorithm>
+#include <csignal>
 #include <cstdint>
 #include <numeric>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -77,6 +79,42 @@ TEST(NestedDissection, APermutationWithTheDenseRowLast) {
   std::iota(natural.begin(), natural.end(), 0);
   EXPECT_NE(order, natural);
   EXPECT_EQ(unjam::nested_dissection_order(P, dense), order);  // deterministic
+}
+
+extern "C" void count_signal(int) {}
+
+// METIS swaps the process's SIGTERM and SIGABRT handlers during each call and puts back the
+// one it found from a per-thread record: two threads calling it at once would leave its own
+// handler installed, and the next SIGTERM would jump into a finished call (a crash of a
+// 2-thread campaign at 1000 disks). The orderings are made one at a time and every call puts
+// the process's handlers back: after many calls from two threads they are still ours, and
+// every ordering is the one of a single thread.
+TEST(NestedDissection, CallsFromTwoThreadsLeaveTheSignalHandlersAsTheyWere) {
+  struct sigaction ours {}, term_before {}, abrt_before {};
+  ours.sa_handler = count_signal;
+  sigemptyset(&ours.sa_mask);
+  ASSERT_EQ(::sigaction(SIGTERM, &ours, &term_before), 0);
+  ASSERT_EQ(::sigaction(SIGABRT, &ours, &abrt_before), 0);
+  const Sparse S = grid_with_border(24);
+  const Eigen::SparseMatrix<double, Eigen::ColMajor, int> P = S;
+  std::vector<bool> dense(static_cast<std::size_t>(S.rows()), false);
+  dense.back() = true;
+  const std::vector<int> expected = unjam::nested_dissection_order(P, dense);
+  ASSERT_EQ(expected.size(), static_cast<std::size_t>(S.rows()));
+  std::vector<int> same(2, 0);
+  const auto work = [&](int t) {
+    for (int i = 0; i < 200; ++i) same[static_cast<std::size_t>(t)] += unjam::nested_dissection_order(P, dense) == expected;
+  };
+  std::thread a(work, 0), b(work, 1);
+  a.join();
+  b.join();
+  EXPECT_EQ(same[0], 200);
+  EXPECT_EQ(same[1], 200);
+  struct sigaction term {}, abrt {};
+  ASSERT_EQ(::sigaction(SIGTERM, &term_before, &term), 0);
+  ASSERT_EQ(::sigaction(SIGABRT, &abrt_before, &abrt), 0);
+  EXPECT_EQ(term.sa_handler, &count_signal);
+  EXPECT_EQ(abrt.sa_handler, &count_signal);
 }
 
 TEST(KluFactor, DiagonalPivotingSolvesAsPartialWithNoMoreFill) {

@@ -9,6 +9,7 @@
 #include "unjam/core/version.hpp"
 
 int main(int argc, char** argv) {
+  unjam::cli::listen_for_interrupts();  // before any thread: OpenMP's, MPI's
   CLI::App app{"unjam: jammed packings of rigid frictional disks (contact dynamics, local "
                "perturbation probe, force-network ensemble)"};
   app.set_version_flag("--version", unjam::kVersion);

@@ -4,27 +4,68 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <thread>
 
 #include <omp.h>
+#include <pthread.h>
 #include <unistd.h>
 
 namespace unjam::cli {
 namespace {
 std::string g_command_line;
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int sig) { g_signal = sig; }
+std::atomic<int> g_signal{0};  // the interrupt received while a guard was alive
+std::atomic<int> g_guards{0};  // guards alive
+
+// What an interrupt does: while a guard is alive it sets the flag the runs poll; otherwise it
+// takes the signal's default action, ending the process as it would without the guard.
+// Async-signal-safe (lock-free atomics, signal, raise): also the handler of the threads that
+// do not block the interrupts (those a library starts before main, as OpenBLAS's pool).
+void interrupt(int sig) {
+  if (g_guards > 0) {
+    g_signal = sig;
+    return;
+  }
+  std::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+extern "C" void on_signal(int sig) { interrupt(sig); }
+
+sigset_t interrupt_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  return set;
+}
+
+// The thread that receives SIGINT and SIGTERM in place of every thread made from main on
+// (they block them). For the default action it unblocks the signal before raising it.
+void listen() {
+  const sigset_t set = interrupt_signals();
+  for (;;) {
+    int sig = 0;
+    if (::sigwait(&set, &sig) != 0) continue;
+    if (g_guards == 0) ::pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+    interrupt(sig);
+  }
+}
 }  // namespace
+
+void listen_for_interrupts() {
+  // Not ignored (a shell's background job inherits SIGINT ignored): the guard's stop applies.
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const sigset_t set = interrupt_signals();
+  ::pthread_sigmask(SIG_BLOCK, &set, nullptr);  // inherited by every thread made from here on
+  std::thread(listen).detach();
+}
 
 InterruptGuard::InterruptGuard() {
   g_signal = 0;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  ++g_guards;
 }
 
-InterruptGuard::~InterruptGuard() {
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
-}
+InterruptGuard::~InterruptGuard() { --g_guards; }
 
 bool InterruptGuard::requested() { return g_signal != 0; }
 

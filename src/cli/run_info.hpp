@@ -20,9 +20,16 @@ std::string format_bytes(double bytes);
 // "42.0 s", "3 min 05 s", "2 h 10 min".
 std::string format_duration(double seconds);
 
+// Called first in main: SIGINT and SIGTERM are blocked in the main thread and in every
+// thread made from it (OpenMP's, MPI's) and taken by one listening thread, so that no handler
+// runs inside the computation (METIS installs its own for SIGTERM during its calls,
+// core/nested_dissection). Threads a library made before main (OpenBLAS's pool) do not block
+// them and run the same handler. Outside an InterruptGuard they end the process as by default.
+void listen_for_interrupts();
+
 // While alive, Ctrl-C (SIGINT) and SIGTERM do not kill the process but set a flag that long
-// runs poll, so they stop at a clean point and save their state. The default handlers come
-// back when it goes out of scope, also when the run throws.
+// runs poll, so they stop at a clean point and save their state. Their default action comes
+// back when it goes out of scope, also when the run throws. Needs listen_for_interrupts().
 class InterruptGuard {
  public:
   InterruptGuard();

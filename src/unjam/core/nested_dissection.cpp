@@ -1,12 +1,36 @@
 #include "unjam/core/nested_dissection.hpp"
 
 #include <algorithm>
+#include <csignal>
 #include <iostream>  // Eigen's MetisSupport reports METIS errors on std::cerr
+#include <mutex>
 #include <numeric>
 
 #include <Eigen/MetisSupport>
 
 namespace unjam {
+
+namespace {
+// METIS (its GKlib) traps SIGTERM and SIGABRT around every call: it installs its own handler,
+// which longjmps back into the call, and on return puts back the handler it found, from a
+// per-thread record. The handlers are the process's, not the thread's: two calls at once
+// from two threads leave METIS's handler installed after both have returned, and the next
+// SIGTERM then jumps into a call that has ended (a crash instead of the clean stop of
+// docs/probe.md, "Campaigns"). So one call at a time, and the process's handlers of the two
+// signals are put back as they were before it, whatever METIS leaves.
+std::mutex metis_mutex;
+
+template <class Call>
+void metis_call(Call&& call) {
+  const std::lock_guard<std::mutex> lock(metis_mutex);
+  struct sigaction term {}, abrt {};
+  ::sigaction(SIGTERM, nullptr, &term);
+  ::sigaction(SIGABRT, nullptr, &abrt);
+  call();
+  ::sigaction(SIGTERM, &term, nullptr);
+  ::sigaction(SIGABRT, &abrt, nullptr);
+}
+}  // namespace
 
 std::vector<bool> dense_rows(const std::vector<int>& count) {
   const double entries = std::accumulate(count.begin(), count.end(), 0.0);
@@ -47,7 +71,7 @@ std::vector<int> nested_dissection_order(const Eigen::SparseMatrix<double, Eigen
   permute.reserve(static_cast<std::size_t>(n));
   if (ns > 0) {
     Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> Q;
-    Eigen::MetisOrdering<int>()(G, Q);  // Q.indices()[new] = old, as METIS's perm
+    metis_call([&] { Eigen::MetisOrdering<int>()(G, Q); });  // Q.indices()[new] = old, as METIS's perm
     if (Q.size() != ns) return {};
     for (int i = 0; i < ns; ++i) permute.push_back(sparse_rows[static_cast<std::size_t>(Q.indices()[i])]);
   }

@@ -16,6 +16,8 @@ std::vector<bool> dense_rows(const std::vector<int>& count);
 // The ordering of a symmetric sparsity pattern P (values ignored; the pattern of P + P^T is
 // read): permute[new] = old. The rows marked dense are left out of the graph and ordered last,
 // in their original order, as a minimum-degree ordering does. Empty if METIS fails.
+// Thread-safe: the calls into METIS are made one at a time, and each leaves the process's
+// handlers of SIGTERM and SIGABRT as it found them (METIS swaps them during the call).
 std::vector<int> nested_dissection_order(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& P,
                                          const std::vector<bool>& dense);
 
