@@ -332,23 +332,21 @@ TEST_F(CliReliability, ExitCodesOfEverySubcommand) {
   EXPECT_EQ(cd.output.find("179769"), std::string::npos) << cd.output;
 }
 
-// Whether process `pid` catches `sig` (its handler installed): /proc/PID/status, SigCgt.
-bool catches(pid_t pid, int sig) {
+// Bit `sig` of the signal mask `field` of process `pid`'s main thread (/proc/PID/status).
+bool status_bit(pid_t pid, const std::string& field, int sig) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   for (std::string line; std::getline(status, line);)
-    if (line.rfind("SigCgt:", 0) == 0) return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1ULL;
+    if (line.rfind(field, 0) == 0) return (std::stoull(line.substr(field.size()), nullptr, 16) >> (sig - 1)) & 1ULL;
   return false;
 }
 
-// Whether the main thread of process `pid` blocks `sig` (/proc/PID/status, SigBlk): the tool
-// takes SIGINT and SIGTERM in a listening thread by sigwait, so that no handler runs inside
-// the computation (METIS installs its own for SIGTERM during its calls, core/nested_dissection).
-bool blocks(pid_t pid, int sig) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  for (std::string line; std::getline(status, line);)
-    if (line.rfind("SigBlk:", 0) == 0) return (std::stoull(line.substr(7), nullptr, 16) >> (sig - 1)) & 1ULL;
-  return false;
-}
+// Whether process `pid` catches `sig` (its handler installed, SigCgt).
+bool catches(pid_t pid, int sig) { return status_bit(pid, "SigCgt:", sig); }
+
+// Whether the main thread of process `pid` blocks `sig` (SigBlk): the tool takes SIGINT and
+// SIGTERM in a listening thread by sigwait, so that no handler runs inside the computation
+// (METIS installs its own for SIGTERM during its calls, core/nested_dissection).
+bool blocks(pid_t pid, int sig) { return status_bit(pid, "SigBlk:", sig); }
 
 // SIGTERM in the middle of a long probe (nlgs, 6e5 sweeps that do not converge: seconds of
 // compute): the probe is abandoned at once, the run exits with the interrupt code 3 leaving a

@@ -63,17 +63,26 @@ TEST(NestedDissection, DenseRowsByTheirCount) {
   EXPECT_FALSE(unjam::dense_rows({300, 20, 20, 20})[0]);     // 300 < 10 x 90
 }
 
+// The pattern of grid_with_border(side) as nested_dissection_order reads it, its border row
+// marked dense.
+struct GridPattern {
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> P;
+  std::vector<bool> dense;
+  explicit GridPattern(int side) : P(grid_with_border(side)), dense(static_cast<std::size_t>(P.rows()), false) {
+    dense.back() = true;
+  }
+};
+
 TEST(NestedDissection, APermutationWithTheDenseRowLast) {
-  const Sparse S = grid_with_border(30);
-  const Eigen::SparseMatrix<double, Eigen::ColMajor, int> P = S;
-  std::vector<bool> dense(static_cast<std::size_t>(S.rows()), false);
-  dense.back() = true;
+  const GridPattern grid(30);
+  const auto& P = grid.P;
+  const auto& dense = grid.dense;
   const std::vector<int> order = unjam::nested_dissection_order(P, dense);
-  ASSERT_EQ(order.size(), static_cast<std::size_t>(S.rows()));
+  ASSERT_EQ(order.size(), static_cast<std::size_t>(P.rows()));
   std::vector<int> sorted = order;
   std::sort(sorted.begin(), sorted.end());
   for (int i = 0; i < static_cast<int>(sorted.size()); ++i) ASSERT_EQ(sorted[static_cast<std::size_t>(i)], i);
-  EXPECT_EQ(order.back(), S.rows() - 1);
+  EXPECT_EQ(order.back(), P.rows() - 1);
   // Nested dissection orders a separator last: not the grid's natural order.
   std::vector<int> natural(order.size());
   std::iota(natural.begin(), natural.end(), 0);
@@ -95,12 +104,11 @@ TEST(NestedDissection, CallsFromTwoThreadsLeaveTheSignalHandlersAsTheyWere) {
   sigemptyset(&ours.sa_mask);
   ASSERT_EQ(::sigaction(SIGTERM, &ours, &term_before), 0);
   ASSERT_EQ(::sigaction(SIGABRT, &ours, &abrt_before), 0);
-  const Sparse S = grid_with_border(24);
-  const Eigen::SparseMatrix<double, Eigen::ColMajor, int> P = S;
-  std::vector<bool> dense(static_cast<std::size_t>(S.rows()), false);
-  dense.back() = true;
+  const GridPattern grid(24);
+  const auto& P = grid.P;
+  const auto& dense = grid.dense;
   const std::vector<int> expected = unjam::nested_dissection_order(P, dense);
-  ASSERT_EQ(expected.size(), static_cast<std::size_t>(S.rows()));
+  ASSERT_EQ(expected.size(), static_cast<std::size_t>(P.rows()));
   std::vector<int> same(2, 0);
   const auto work = [&](int t) {
     for (int i = 0; i < 200; ++i) same[static_cast<std::size_t>(t)] += unjam::nested_dissection_order(P, dense) == expected;

@@ -20,7 +20,7 @@ std::atomic<int> g_guards{0};  // guards alive
 // takes the signal's default action, ending the process as it would without the guard.
 // Async-signal-safe (lock-free atomics, signal, raise): also the handler of the threads that
 // do not block the interrupts (those a library starts before main, as OpenBLAS's pool).
-void interrupt(int sig) {
+extern "C" void on_signal(int sig) {
   if (g_guards > 0) {
     g_signal = sig;
     return;
@@ -28,7 +28,6 @@ void interrupt(int sig) {
   std::signal(sig, SIG_DFL);
   ::raise(sig);
 }
-extern "C" void on_signal(int sig) { interrupt(sig); }
 
 sigset_t interrupt_signals() {
   sigset_t set;
@@ -46,7 +45,7 @@ void listen() {
     int sig = 0;
     if (::sigwait(&set, &sig) != 0) continue;
     if (g_guards == 0) ::pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
-    interrupt(sig);
+    on_signal(sig);
   }
 }
 }  // namespace
