@@ -39,9 +39,12 @@ PY = sys.executable or "/usr/bin/python3"
 # cd_compliant_start: the compliance the continuation starts from (`unjam probe
 # --cd-compliant-start`; 0: unjam's default; docs/probe.md, "Where the continuation starts");
 # cd_softer_starts: its softer starts (`unjam probe --cd-softer-starts`; -1: unjam's default).
+# cd_settle_compliance: end a path at its first exact solution at or below this compliance
+# (`unjam probe --cd-settle-compliance`; 0: unjam's default, never; docs/probe.md, "Settling at
+# an exact solution").
 # They are passed to unjam only where set, so stages cached without them stay valid.
 CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0,
-               "cd_softer_starts": -1}
+               "cd_softer_starts": -1, "cd_settle_compliance": 0}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
              "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
@@ -156,7 +159,8 @@ def cd_options(cfg):
     for key, flag in (("cd_max_pieces", "--cd-max-pieces"),
                       ("cd_accept_residual", "--cd-accept-residual"),
                       ("cd_compliant_start", "--cd-compliant-start"),
-                      ("cd_softer_starts", "--cd-softer-starts")):
+                      ("cd_softer_starts", "--cd-softer-starts"),
+                      ("cd_settle_compliance", "--cd-settle-compliance")):
         value = cfg.get(key, CD_DEFAULTS[key])
         if value != CD_DEFAULTS[key]:
             args += [flag, str(value) if isinstance(value, int) else repr(value)]

@@ -477,6 +477,51 @@ TEST(CdPath, StopsAtANearExactSolutionWithinTheAcceptedResidual) {
   }
 }
 
+TEST(CdPath, SettlesAtTheFirstExactSolutionAtOrBelowTheSettleCompliance) {
+  // p200-mu1, compliant start at the quasi-static step. Contact 34: the continuation's lowering
+  // passes a compliance of 1e-5 with an exact solution (6.5e-8 g) and goes on down to 3.65e-7,
+  // where a lowering fails (134 pieces, 4.1e-8 g). With CdPathSettings::settle_compliance
+  // (`--cd-settle-compliance`) at 1e-5 it ends there, in 8 pieces, with F_crit within 2e-5;
+  // at or below the rigid compliance the rule never acts before the default's end. Contact 3:
+  // settled at 1e-5, the path returns another of the step's exact solutions, F_crit 43 % above
+  // the rigid limit's (docs/probe.md, "Settling at an exact solution").
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings rigid_limit;
+  rigid_limit.start = CdPathStart::compliant;
+  ASSERT_EQ(rigid_limit.settle_compliance, 0.0);
+  CdPathSettings settled = rigid_limit;
+  settled.settle_compliance = 1e-5;
+  CdPathSettings at_rigid = rigid_limit;
+  at_rigid.settle_compliance = rigid_limit.compliance;
+  CdPathStats a, b, c;
+  const CdStepSolution sa = probe_cd_path(p, 34, quasi_static_step(), rigid_limit, &a);
+  const CdStepSolution sb = probe_cd_path(p, 34, quasi_static_step(), settled, &b);
+  const CdStepSolution sc = probe_cd_path(p, 34, quasi_static_step(), at_rigid, &c);
+  ASSERT_TRUE(sa.result.converged);
+  ASSERT_GT(sa.residual.max(), 1e-3 * kExactStepTolerance);  // not ended by the residual: lowered on
+  ASSERT_TRUE(sb.result.converged);
+  EXPECT_GT(sb.residual.max(), sa.residual.max());
+  EXPECT_LT(b.pieces_all, a.pieces_all / 10);
+  EXPECT_NEAR(sb.result.f_crit / sa.result.f_crit, 1.0, 1e-4);
+  EXPECT_NE(sb.result.f_crit, sa.result.f_crit);
+  EXPECT_EQ(c.pieces_all, a.pieces_all);
+  EXPECT_EQ(sc.result.f_crit, sa.result.f_crit);
+  CdPathStats d, e;
+  const CdStepSolution sd = probe_cd_path(p, 3, quasi_static_step(), rigid_limit, &d);
+  const CdStepSolution se = probe_cd_path(p, 3, quasi_static_step(), settled, &e);
+  ASSERT_TRUE(sd.result.converged);
+  ASSERT_TRUE(se.result.converged);
+  EXPECT_LT(e.pieces_all, d.pieces_all);
+  EXPECT_GT(se.result.f_crit, 1.3 * sd.result.f_crit);
+  // A negative or non-finite compliance is refused.
+  for (double bad : {-1e-5, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    CdPathSettings wrong = rigid_limit;
+    wrong.settle_compliance = bad;
+    EXPECT_THROW(validate(wrong), Error) << bad;
+    EXPECT_THROW(probe_cd_path(p, 34, quasi_static_step(), wrong), Error) << bad;
+  }
+}
+
 TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   // p200-mu1, contact 14: lowered from compliance 0.1, the soft solution's branch turns back
   // in the compliance at ~0.012 (the proximal paths there close on themselves) and the

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <set>
 #include <string>
 
@@ -47,6 +48,13 @@ class CliProbe : public testing::FixtureCopy {
     const nlohmann::json without = read_json_file(unrecorded / "probe_summary.json");
     EXPECT_FALSE(without["settings"].contains(key));
     return without;
+  }
+  // Runs `command`, which must exit 0 and print every one of `phrases`.
+  testing::ToolRun run_printing(const std::string& command, std::initializer_list<const char*> phrases) {
+    testing::ToolRun r = run_tool(command);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    for (const char* phrase : phrases) EXPECT_NE(r.output.find(phrase), std::string::npos) << phrase << "\n" << r.output;
+    return r;
   }
 };
 
@@ -766,16 +774,11 @@ TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRec
   // checkpoint does not resume without it.
   const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
   const std::string one = "probe " + q(p200) + " --contact 8 --method cd --cd-start compliant --threads 1 ";
-  testing::ToolRun r = run_tool(one + "--cd-accept-residual 1e-4 --out " + q(root_ / "accepted"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("converged NO"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("near-exact: the search stopped at the first solution within --cd-accept-residual 0.0001 g"),
-            std::string::npos) << r.output;
+  testing::ToolRun r = run_printing(
+      one + "--cd-accept-residual 1e-4 --out " + q(root_ / "accepted"),
+      {"converged NO", "near-exact: the search stopped at the first solution within --cd-accept-residual 0.0001 g"});
   EXPECT_EQ(r.output.find("path 2"), std::string::npos) << r.output;
-  r = run_tool(one + "--out " + q(root_ / "exact"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("converged yes"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("path 2"), std::string::npos) << r.output;
+  run_printing(one + "--out " + q(root_ / "exact"), {"converged yes", "path 2"});
   const nlohmann::json without =
       expect_recorded_where_set("probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ",
                                 "--cd-accept-residual 1e-4", "cd_accept_residual", 1e-4);
@@ -794,6 +797,27 @@ TEST_F(CliProbe, StopsAtANearExactSolutionWhereTheUserAcceptsItAndTheCampaignRec
   r = run_tool(three + "--out " + q(root_ / "three-exact"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("not converged: 0"), std::string::npos) << r.output;
+}
+
+TEST_F(CliProbe, SettlesAtAnExactSolutionWhereTheUserSaysAndTheCampaignRecordsIt) {
+  // Contact 34 of p200-mu1 (quasi-static, compliant start): the lowering passes a compliance of
+  // 1e-5 with an exact solution and goes on down to 3.65e-7 (134 pieces); with
+  // --cd-settle-compliance 1e-5 the probe ends there in 8, exact, and its path says so (docs/
+  // probe.md, "Settling at an exact solution"). A campaign records the setting, says it, and
+  // its checkpoint does not resume without it.
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  const std::string one = "probe " + q(p200) + " --contact 34 --method cd --cd-start compliant --threads 1 ";
+  run_printing(one + "--cd-settle-compliance 1e-5 --out " + q(root_ / "settled"),
+               {"converged yes  sweeps/pivots 8 ",
+                "path 1 at compliance 0.1: full opening; 14 lowerings, settled at compliance 6.1e-06"});
+  run_printing(one + "--out " + q(root_ / "rigid"),
+               {"converged yes  sweeps/pivots 134 ",
+                "path 1 at compliance 0.1: full opening; 23 lowerings, stopped at compliance 3.65e-07 (loop)"});
+  const std::string campaign =
+      "probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
+  run_printing(campaign + "--cd-settle-compliance 1e-5 --out " + q(root_ / "says"),
+               {"settling at exact solutions at compliances <= 1e-05"});
+  expect_recorded_where_set(campaign, "--cd-settle-compliance 1e-5", "cd_settle_compliance", 1e-5);
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

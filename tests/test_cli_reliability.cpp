@@ -285,6 +285,8 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-accept-residual 1e-7 --out " + out.string(), "--cd-accept-residual must be in [1e-06, 0.001] g (got 1e-07)"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-accept-residual 0.01 --out " + out.string(), "--cd-accept-residual must be in [1e-06, 0.001] g (got 0.01)"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-accept-residual nan --out " + out.string(), "must be a finite number > 0"},
+      {"probe " + fixture.string() + " --contact 1 --cd-settle-compliance 1e-5 --out " + out.string(), "--cd-settle-compliance applies to the cd method, not to lp"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-settle-compliance -1 --out " + out.string(), "--cd-settle-compliance"},
       {"ensemble " + fixture.string() + " --thin -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --burn-in -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --probe-g nan", "must be a finite number > 0"},

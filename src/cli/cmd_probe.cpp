@@ -199,6 +199,9 @@ void print_cd_paths(const CdPathStats& stats) {
     else if (a.compliance_end > 0.0)
       std::printf("full opening; %d lowerings, stopped at compliance %.3g (%s)", a.lowerings, a.compliance_end,
                   a.failure.c_str());
+    else if (a.compliance_settled > 0.0)
+      std::printf("full opening; %d lowerings, settled at compliance %.3g (--cd-settle-compliance)", a.lowerings,
+                  a.compliance_settled);
     else
       std::printf("full opening%s", a.lowerings > 0 ? "; lowered to the rigid step" : "");
     if (a.residual == kNoSolution)
@@ -408,13 +411,15 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   char window[96] = "";
   if (s.nlgs.window > 0.0)
     std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
-  char budget[96] = "", accept[64] = "";
+  char budget[96] = "", accept[64] = "", settle[64] = "";
   if (s.cd.max_probe_pieces > 0)  // cd only (validate)
     std::snprintf(budget, sizeof budget, ", at most %lld pieces per probe", s.cd.max_probe_pieces);
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual)  // cd only (validate)
     std::snprintf(accept, sizeof accept, ", stopping at a residual of %g g", s.cd.accept_residual);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, budget, accept, omp_get_max_threads(), spread.c_str());
+  if (s.cd.settle_compliance > 0.0)  // cd only (validate)
+    std::snprintf(settle, sizeof settle, ", settling at exact solutions at compliances <= %g", s.cd.settle_compliance);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, omp_get_max_threads(), spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
@@ -689,6 +694,14 @@ void add_probe_command(CLI::App& app) {
                   "near-exact probe's pieces at 1000 disks (docs/probe.md, \"Accepting a near-exact solution\")")
       ->capture_default_str()
       ->check(positive_number());
+  cmd->add_option("--cd-settle-compliance", o->cd.settle_compliance,
+                  "cd: end a path at its first exact solution once its compliance (a fraction of g / (dt^2 F0)) is "
+                  "at or below this, instead of lowering it on to the rigid step (0: never, the path's rigid limit). "
+                  "At low friction the forces have settled by 1e-5 and the last lowerings can spend a probe's budget; "
+                  "at mu = 1 it may return another of the step's exact solutions (docs/probe.md, \"Settling at an "
+                  "exact solution\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
   cmd->add_option("--window", o->window,
                   "lemke, cd: solve the step on the grains within this many mean diameters of the probed pair only, "
                   "every other grain clamped to the cell. Not the paper's probe: F_crit of the clamped window, the "

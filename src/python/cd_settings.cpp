@@ -44,6 +44,7 @@ py::dict fields(const CdPathSettings& s) {
   d["interior_states_retries"] = s.interior_states_retries;
   d["interior_iterations"] = s.interior_max_iterations;
   d["interior_neighbourhood"] = s.interior_neighbourhood;
+  d["settle_compliance"] = s.settle_compliance;
   return d;
 }
 
@@ -66,7 +67,8 @@ bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return f
 
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
-                           int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
+                           int interior_states_retries, int interior_iterations, double interior_neighbourhood,
+                           double settle_compliance) {
   CdPathSettings s;
   s.start = cd_start_from_name(start);
   s.compliant_start = compliant_start;
@@ -78,6 +80,7 @@ CdPathSettings cd_settings(const std::string& start, double compliant_start, int
   s.interior_states_retries = interior_states_retries;
   s.interior_max_iterations = interior_iterations;
   s.interior_neighbourhood = interior_neighbourhood;
+  s.settle_compliance = settle_compliance;
   return s;
 }
 
@@ -89,10 +92,11 @@ void bind_cd_settings(py::module_& m) {
           "method='cd', cd=settings). Every assignment is range-checked; docs/probe.md");
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
-                    int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
+                    int interior_states_retries, int interior_iterations, double interior_neighbourhood,
+                    double settle_compliance) {
           const CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
                                                interior_states_pieces, interior_states_stall, interior_states_retries,
-                                               interior_iterations, interior_neighbourhood);
+                                               interior_iterations, interior_neighbourhood, settle_compliance);
           validate(s);
           return s;
         }),
@@ -103,7 +107,8 @@ void bind_cd_settings(py::module_& m) {
         py::arg("interior_states_stall") = d.interior_states_stall,
         py::arg("interior_states_retries") = d.interior_states_retries,
         py::arg("interior_iterations") = d.interior_max_iterations,
-        py::arg("interior_neighbourhood") = d.interior_neighbourhood);
+        py::arg("interior_neighbourhood") = d.interior_neighbourhood,
+        py::arg("settle_compliance") = d.settle_compliance);
   c.def_property(
       "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
       [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
@@ -136,6 +141,9 @@ void bind_cd_settings(py::module_& m) {
   checked_field(c, "interior_neighbourhood", &CdPathSettings::interior_neighbourhood,
                 "interior start: the wide neighbourhood of a second interior-point run, in [0, 1) (0: none; "
                 "--cd-interior-neighbourhood)");
+  checked_field(c, "settle_compliance", &CdPathSettings::settle_compliance,
+                "the compliance at or below which a path ends at its first exact solution, >= 0 (0: never; "
+                "--cd-settle-compliance; docs/probe.md, \"Settling at an exact solution\")");
   c.def("__repr__", &repr);
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });

@@ -720,7 +720,13 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   sol.residual = cd_step_residual(pb, sol.f);
   std::vector<State> states = path.states();  // those of sol.f
   Eigen::VectorXd f_latest = sol.f;  // the latest solution (the next proximal step's reference)
-  const auto exact_enough = [&] { return sol.residual.max() <= 1e-3 * kExactStepTolerance; };
+  // Lowered far enough: a residual of 1e-3 of the exact one, or an exact one at or below the
+  // compliance where the user takes the forces as settled (CdPathSettings::settle_compliance).
+  const auto settled = [&] {
+    return sol.residual.max() <= kExactStepTolerance &&
+           path.compliance() <= kappa_of(ps.settle_compliance) * (1.0 + 1e-12);
+  };
+  const auto exact_enough = [&] { return sol.residual.max() <= 1e-3 * kExactStepTolerance || settled(); };
   // Keeps forces f (the path's present solution) where they lower the residual.
   const auto keep_if_better = [&](const Eigen::VectorXd& f) {
     const CdStepResidual res = cd_step_residual(pb, f);
@@ -780,6 +786,9 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
     f_latest = path.forces(x0 + x1);
     if (!keep_if_better(f_latest)) break;
   }
+  // Ended by the settle rule (not by a residual of 1e-3 of the exact one).
+  if (!given_up && settled() && sol.residual.max() > 1e-3 * kExactStepTolerance)
+    stats.compliance_settled = compliance_of(path.compliance());
   stats.factorizations += path.factorizations();
   for (int k = 0; k < nc; ++k) {
     if (states[k] == State::kOpen && k != contact) ++stats.open;
@@ -920,6 +929,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
   if (!(ps.accept_residual >= kExactStepTolerance && ps.accept_residual <= kMaxPathResidual))
     throw Error("cd path: accept_residual must be in [" + std::to_string(kExactStepTolerance) + ", " +
                 std::to_string(kMaxPathResidual) + "] g (got " + std::to_string(ps.accept_residual) + ")");
+  if (!(ps.settle_compliance >= 0.0 && std::isfinite(ps.settle_compliance)))
+    throw Error("cd path: settle_compliance must be >= 0 and finite (got " + std::to_string(ps.settle_compliance) + ")");
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
@@ -979,7 +990,7 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
           follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                       stats.failure, iterate_states, other_iterate});
+                       stats.failure, iterate_states, other_iterate, stats.compliance_settled});
       // restart_divisor below where this lowering stopped (or this path's start, where it failed),
       // never below the rigid compliance itself: a path there is the static start's.
       if (soft)

@@ -131,6 +131,15 @@ struct CdPathSettings {
   // paths after a near-exact solution mostly fail and cost most of a near-exact probe's pieces
   // at 1000 disks (docs/probe.md, "Accepting a near-exact solution").
   double accept_residual = kExactStepTolerance;
+  // The compliance (as `compliance`) at or below which a path's lowering, and its proximal
+  // steps at its rigid compliance, end at the path's first exact solution (residual at most
+  // kExactStepTolerance; `--cd-settle-compliance`), instead of going on to 1e-3 of that
+  // residual or down to the rigid compliance. 0 (the default): never, so a path returns the
+  // limit it follows. At low friction the forces have settled there: 2000 disks, mu = 0.05,
+  // F_crit within 4e-5 and half the pieces of the probes whose last lowerings spend the
+  // budget; at mu = 1 a path stopped at 1e-5 returns another of the step's exact solutions on
+  // some probes (docs/probe.md, "Settling at an exact solution").
+  double settle_compliance = 0.0;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -146,6 +155,8 @@ struct CdPathAttempt {
   bool iterate_states = false;  // interior: started from the iterate's own states (else from its forces')
   bool other_iterate = false;   // interior: from the interior-point method's other iterate (of its two runs,
                                 // the one with the higher natural residual; CdPathSettings::interior_neighbourhood)
+  double compliance_settled = 0.0;  // where its lowering ended at an exact solution by
+                                    // CdPathSettings::settle_compliance (0: it did not)
 };
 
 struct CdPathStats {
@@ -163,6 +174,8 @@ struct CdPathStats {
   double lambda_max = 0.0;    // the largest lambda the first path reached (1: its end)
   double compliance_end = 0.0;  // compliant: the compliance (as `compliance`) where the
                                 // lowering of the returned attempt stopped; 0 if it did not
+  double compliance_settled = 0.0;  // the compliance where the returned attempt's lowering ended at
+                                    // an exact solution by CdPathSettings::settle_compliance; 0 if not
   int interior_iterations = 0;  // interior_point: iterations of the interior-point method
   double interior_residual = 0.0;  // interior_point: its natural residual at the end (F0, g / dt^2)
   // interior_point, where it ran again in the neighbourhood: that run's iterations, plain Newton

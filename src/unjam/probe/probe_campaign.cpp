@@ -224,6 +224,8 @@ void validate(const CdPathSettings& cd) {
                   cd.accept_residual);
     throw Error(std::string("--cd-accept-residual ") + range);
   }
+  if (!(cd.settle_compliance >= 0.0 && std::isfinite(cd.settle_compliance)))
+    throw Error("--cd-settle-compliance must be >= 0 and finite (got " + std::to_string(cd.settle_compliance) + ")");
   if (!(cd.interior_states_pieces >= 0.0 && std::isfinite(cd.interior_states_pieces)))
     throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
                 std::to_string(cd.interior_states_pieces) + ")");
@@ -255,6 +257,8 @@ void validate(const CampaignSettings& s) {
     throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-accept-residual applies to the cd method, not to ") + method_name(s.method));
+  if (s.cd.settle_compliance > 0.0 && s.method != ProbeMethod::kCd)
+    throw Error(std::string("--cd-settle-compliance applies to the cd method, not to ") + method_name(s.method));
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
@@ -491,6 +495,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kCd && s.cd.accept_residual != CdPathSettings{}.accept_residual)
       j["cd_accept_residual"] = s.cd.accept_residual;  // recorded where set, as cd_start
+    if (s.method == ProbeMethod::kCd && s.cd.settle_compliance > 0.0)
+      j["cd_settle_compliance"] = s.cd.settle_compliance;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.nlgs.window > 0.0) j["window_d"] = s.nlgs.window;            // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
