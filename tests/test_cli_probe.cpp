@@ -585,6 +585,7 @@ TEST_F(CliProbe, ABudgetOfPiecesIsRecordedCountedAndLeavesTheOtherProbesAsTheyWe
   const nlohmann::json summary = read_json_file(out / "probe_summary.json");
   EXPECT_EQ(summary["settings"]["cd_max_pieces"].get<long long>(), 70);
   EXPECT_EQ(summary["over_budget"]["probes"].get<int>(), 2);
+  EXPECT_EQ(summary["over_budget"]["exact"].get<int>(), 0);
   EXPECT_EQ(summary["without_solution"].get<int>(), 2);
   r = run_tool("probe " + q(dir_) + " --contact 38 --method cd --cd-max-pieces 70 --out " + q(out));
   EXPECT_EQ(r.exit_code, 1) << r.output;
@@ -817,6 +818,18 @@ TEST_F(CliProbe, SettlesAtAnExactSolutionWhereTheUserSaysAndTheCampaignRecordsIt
       "probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start compliant --quiet --threads 1 ";
   run_printing(campaign + "--cd-settle-compliance 1e-5 --out " + q(root_ / "says"),
                {"settling at exact solutions at compliances <= 1e-05"});
+  // A budget's summary tells the stopped probes that are exact all the same: of --sample 6
+  // --seed 1 under 100 pieces, contacts 162 (near-exact) and 244 (exact, 2.8e-7 g).
+  const fs::path budget = root_ / "budget";
+  run_printing("probe " + q(p200) + " --sample 6 --seed 1 --method cd --cd-start compliant --cd-max-pieces 100 "
+                   "--quiet --threads 1 --out " + q(budget),
+               {"stopped by the budget of 100 pieces per probe (--cd-max-pieces): 2 probes, 1 of them exact"});
+  const CsvTable rows = CsvTable::read(budget / "probes.csv");
+  int stopped_exact = 0;
+  for (std::size_t i = 0; i < rows.rows(); ++i)
+    stopped_exact += rows.integer(i, rows.column("sweeps")) > 100 && rows.integer(i, rows.column("converged")) == 1;
+  EXPECT_EQ(stopped_exact, 1);
+  EXPECT_EQ(read_json_file(budget / "probe_summary.json")["over_budget"]["exact"].get<int>(), stopped_exact);
   expect_recorded_where_set(campaign, "--cd-settle-compliance 1e-5", "cd_settle_compliance", 1e-5);
 }
 

@@ -466,8 +466,9 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   // cd with a budget (recorded in the settings where set): the probes it stopped, whose
   // sweeps (pieces of all paths) exceed it by the one not taken.
   const long long max_pieces = settings_json.value("cd_max_pieces", 0LL);
-  const int over_budget = probes_over_budget(state, max_pieces);
-  if (max_pieces > 0) summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget}};
+  const OverBudget over_budget = probes_over_budget(state, max_pieces);
+  if (max_pieces > 0)
+    summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget.probes}, {"exact", over_budget.exact}};
   // cd with a residual it accepts (recorded where set): the probes near-exact within it.
   const double accept = settings_json.value("cd_accept_residual", 0.0);
   const int accepted = probes_accepted(state, accept);
@@ -496,9 +497,17 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");
-  if (max_pieces > 0)
-    std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes\n", max_pieces,
-                over_budget);
+  if (max_pieces > 0) {
+    std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes", max_pieces,
+                over_budget.probes);
+    // Exact all the same: their lowerings went on past an exact solution (at low friction
+    // --cd-settle-compliance ends them there).
+    if (over_budget.exact > 0)
+      std::printf(", %d of them exact (a lowering went on past the solution: docs/probe.md, \"Settling at an "
+                  "exact solution\")",
+                  over_budget.exact);
+    std::printf("\n");
+  }
   if (accept > 0.0)
     std::printf("  near-exact within the accepted residual of %g g (--cd-accept-residual): %d probes\n", accept,
                 accepted);

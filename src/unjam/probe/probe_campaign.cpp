@@ -369,10 +369,13 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   return distributor.run(todo, loop);
 }
 
-int probes_over_budget(const CampaignState& state, long long max_pieces) {
-  if (max_pieces <= 0) return 0;
-  int n = 0;
-  for (const ProbeRow& r : state.rows) n += r.sweeps > max_pieces;
+OverBudget probes_over_budget(const CampaignState& state, long long max_pieces) {
+  OverBudget n;
+  if (max_pieces <= 0) return n;
+  for (const ProbeRow& r : state.rows) {
+    n.probes += r.sweeps > max_pieces;
+    n.exact += r.sweeps > max_pieces && r.converged;
+  }
   return n;
 }
 

@@ -200,8 +200,14 @@ std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSe
                                         const std::function<void(int, int)>& progress = {});
 
 // The cd probes of `state` stopped by a budget of max_pieces pieces per probe
-// (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1); 0 where max_pieces <= 0.
-int probes_over_budget(const CampaignState& state, long long max_pieces);
+// (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1), and those of them that
+// are exact all the same (an exact solution met before the budget ended a lowering that went
+// on: docs/probe.md, "Settling at an exact solution"); 0 where max_pieces <= 0.
+struct OverBudget {
+  int probes = 0;
+  int exact = 0;
+};
+OverBudget probes_over_budget(const CampaignState& state, long long max_pieces);
 
 // The cd probes of `state` that are near-exact within accept_residual (CdPathSettings::
 // accept_residual, in g: not converged, residual at most it); 0 where it is the default.
