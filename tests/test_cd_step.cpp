@@ -486,17 +486,21 @@ TEST(CdPath, SettlesAtTheFirstExactSolutionAtOrBelowTheSettleCompliance) {
   // settled at 1e-5, the path returns another of the step's exact solutions, F_crit 43 % above
   // the rigid limit's (docs/probe.md, "Settling at an exact solution").
   const Packing& p = fixture("p200-mu1");
-  CdPathSettings rigid_limit;
-  rigid_limit.start = CdPathStart::compliant;
-  ASSERT_EQ(rigid_limit.settle_compliance, 0.0);
-  CdPathSettings settled = rigid_limit;
-  settled.settle_compliance = 1e-5;
-  CdPathSettings at_rigid = rigid_limit;
-  at_rigid.settle_compliance = rigid_limit.compliance;
+  // The compliant start settling at compliance c (0: never, the default).
+  const auto settling_at = [](double c) {
+    CdPathSettings s;
+    s.start = CdPathStart::compliant;
+    s.settle_compliance = c;
+    return s;
+  };
+  ASSERT_EQ(CdPathSettings{}.settle_compliance, 0.0);
+  const CdPathSettings rigid_limit = settling_at(0.0), settled = settling_at(1e-5),
+                       at_rigid = settling_at(rigid_limit.compliance);
+  const auto probe = [&](int contact, const CdPathSettings& s, CdPathStats& stats) {
+    return probe_cd_path(p, contact, quasi_static_step(), s, &stats);
+  };
   CdPathStats a, b, c;
-  const CdStepSolution sa = probe_cd_path(p, 34, quasi_static_step(), rigid_limit, &a);
-  const CdStepSolution sb = probe_cd_path(p, 34, quasi_static_step(), settled, &b);
-  const CdStepSolution sc = probe_cd_path(p, 34, quasi_static_step(), at_rigid, &c);
+  const CdStepSolution sa = probe(34, rigid_limit, a), sb = probe(34, settled, b), sc = probe(34, at_rigid, c);
   ASSERT_TRUE(sa.result.converged);
   ASSERT_GT(sa.residual.max(), 1e-3 * kExactStepTolerance);  // not ended by the residual: lowered on
   ASSERT_TRUE(sb.result.converged);
@@ -507,18 +511,15 @@ TEST(CdPath, SettlesAtTheFirstExactSolutionAtOrBelowTheSettleCompliance) {
   EXPECT_EQ(c.pieces_all, a.pieces_all);
   EXPECT_EQ(sc.result.f_crit, sa.result.f_crit);
   CdPathStats d, e;
-  const CdStepSolution sd = probe_cd_path(p, 3, quasi_static_step(), rigid_limit, &d);
-  const CdStepSolution se = probe_cd_path(p, 3, quasi_static_step(), settled, &e);
+  const CdStepSolution sd = probe(3, rigid_limit, d), se = probe(3, settled, e);
   ASSERT_TRUE(sd.result.converged);
   ASSERT_TRUE(se.result.converged);
   EXPECT_LT(e.pieces_all, d.pieces_all);
   EXPECT_GT(se.result.f_crit, 1.3 * sd.result.f_crit);
   // A negative or non-finite compliance is refused.
   for (double bad : {-1e-5, std::numeric_limits<double>::infinity(), std::nan("")}) {
-    CdPathSettings wrong = rigid_limit;
-    wrong.settle_compliance = bad;
-    EXPECT_THROW(validate(wrong), Error) << bad;
-    EXPECT_THROW(probe_cd_path(p, 34, quasi_static_step(), wrong), Error) << bad;
+    EXPECT_THROW(validate(settling_at(bad)), Error) << bad;
+    EXPECT_THROW(probe(34, settling_at(bad), d), Error) << bad;
   }
 }
 
