@@ -373,8 +373,9 @@ OverBudget probes_over_budget(const CampaignState& state, long long max_pieces) 
   OverBudget n;
   if (max_pieces <= 0) return n;
   for (const ProbeRow& r : state.rows) {
-    n.probes += r.sweeps > max_pieces;
-    n.exact += r.sweeps > max_pieces && r.converged;
+    const bool stopped = r.sweeps > max_pieces;
+    n.probes += stopped;
+    n.exact += stopped && r.converged;
   }
   return n;
 }
