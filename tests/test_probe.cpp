@@ -200,6 +200,58 @@ TEST(Probe, CriticalForceReachesButNeverExceedsTheLpMaximum) {
   }
 }
 
+TEST(Probe, ExactStepsForceLiesInTheContactsAdmissibleInterval) {
+  // In the quasi-static limit the step's end forces are an admissible network (docs/probe.md,
+  // "The probe"), so the exact step's F_crit lies in [fn_min, fn_max] of the probed contact,
+  // the two ends of its interval by LP (docs/ensemble.md): independent methods, every
+  // force-carrying contact of both 50-disk fixtures. At g / dt^2 = 1e-7 (dt = 0.1) the
+  // inertial excess is ~1e-6 F0 (measured: at most 4.1e-6 F0 above fn_max, p50-mu1 contact
+  // 69; 100 times that at the default dt = 0.01, docs/probe.md, "The quasi-static limit").
+  // With friction the paper's probe need not reach the top: at mu = 1 F_crit sits at
+  // t = (F_crit - fn_min) / (fn_max - fn_min) = 0.29-1 (median 0.96), at mu = 0.1 at
+  // 0.91-1 (median 0.99). The interior-point start, exact on every fixture probe.
+  ProbeSettings s;
+  s.dt = 0.1;
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  for (const char* name : {"p50-mu0.1", "p50-mu1"}) {
+    const Packing p = read_packing(std::string(UNJAM_FIXTURES_DIR) + "/" + name);
+    const double F0 = p.force_unit();
+    const EquilibriumSystem sys = build_equilibrium_system(p);
+    ForceLP lp(sys, LpMethod::simplex);
+    std::vector<double> t;
+    int probed = 0;
+    for (int j = 0; j < sys.num_contacts(); ++j) {
+      const int k = sys.contacts[j];
+      if (!(p.contacts[k].fn > 0.0)) continue;
+      const double fn_min = lp.min_fn(j), fn_max = lp.max_fn(j);
+      const ProbeResult r = probe_cd_path(p, k, s, interior).result;
+      const std::string at = std::string(name) + " contact " + std::to_string(k);
+      ASSERT_TRUE(r.converged) << at;
+      ASSERT_LE(r.residual, kExactStepTolerance) << at;
+      EXPECT_LE(fn_min, p.contacts[k].fn + 1e-9 * F0) << at;  // the packing's own network
+      EXPECT_GE(fn_max, p.contacts[k].fn - 1e-9 * F0) << at;
+      EXPECT_GE(r.f_crit, fn_min - 1e-5 * F0) << at;
+      EXPECT_LE(r.f_crit, fn_max + 1e-5 * F0) << at;
+      if (fn_max - fn_min > 1e-3 * F0) t.push_back((r.f_crit - fn_min) / (fn_max - fn_min));
+      ++probed;
+    }
+    ASSERT_GT(t.size(), 40u) << name;
+    std::sort(t.begin(), t.end());
+    const double median = t[t.size() / 2];
+    if (std::string(name) == "p50-mu0.1") {
+      EXPECT_EQ(probed, 81);
+      EXPECT_GT(t.front(), 0.9);  // measured 0.914
+      EXPECT_GT(median, 0.98);    // measured 0.990
+    } else {
+      EXPECT_EQ(probed, 56);
+      EXPECT_LT(t.front(), 0.4);  // measured 0.286
+      EXPECT_GT(median, 0.9);     // measured 0.959
+      EXPECT_LT(median, 0.99);
+    }
+  }
+}
+
 TEST(Probe, ResultDoesNotDependOnTheGapInTheSmallGapLimit) {
   const Packing& p = fixture_p50();
   ProbeSettings small;
