@@ -71,8 +71,6 @@ Exit codes: 0 done, 1 bad input or command line (the message is printed, no trac
 """
 
 import argparse
-import csv
-import io
 import json
 import math
 import os
@@ -84,8 +82,9 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from campaign_time import cpu_per_probe  # noqa: E402
 from plot_exact_sweep import friction_figure  # noqa: E402
-from unjam_plot import (UserError, json_number, read_csv, read_json, require_dir,  # noqa: E402
-                        run_main, save_figure, warn, write_file_atomic)
+from unjam_plot import (UserError, csv_text, json_number, json_value, read_csv,  # noqa: E402
+                        read_json, require_dir, run_main, save_figure, warn,
+                        write_file_atomic)
 
 # Residual of the cd step (units of g) up to which it has a solution, and is exact.
 SOLVED_RESIDUAL = 1e-3
@@ -250,7 +249,7 @@ def _list(contacts, most=10):
 
 def compare_pair(cd, lp, label):
     """(the pair's numbers, its ratios.csv rows, the ratios of its solved contacts)."""
-    s_cd, s_lp = cd["summary"], lp["summary"]
+    s_cd = cd["summary"]
     name = label or f"pair {cd['dir']} {lp['dir']}"
     shared = sorted(set(cd["rows"]) & set(lp["rows"]))
     if not shared:
@@ -364,35 +363,6 @@ def compare_pair(cd, lp, label):
 def write_atomic(path, text):
     """text to path: a temporary file beside it, then os.replace (UserError if it fails)."""
     write_file_atomic(path, lambda f: f.write(text))
-
-
-def _csv_field(v):
-    """Full precision (repr) for floats, empty for NaN or None."""
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "" if math.isnan(v) else repr(v)
-    return v
-
-
-def csv_text(rows, columns):
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(columns)
-    for r in rows:
-        w.writerow([_csv_field(r[c]) for c in columns])
-    return buf.getvalue()
-
-
-def _json_value(v):
-    """v with every non-finite float (NaN: no value) as None, for strict JSON."""
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    if isinstance(v, dict):
-        return {k: _json_value(x) for k, x in v.items()}
-    if isinstance(v, list):
-        return [_json_value(x) for x in v]
-    return v
 
 
 def _fixed(v, digits):
@@ -549,14 +519,14 @@ def main():
         "pairs": [],
     }
     for p, cd, lp in zip(pairs, campaigns[::2], campaigns[1::2]):
-        entry = {k: _json_value(p[k]) for k in COMPARE_COLUMNS}
+        entry = {k: json_value(p[k]) for k in COMPARE_COLUMNS}
         for role, c in (("cd", cd), ("lp", lp)):
             s = c["summary"]
             entry[role] = {"dir": os.path.abspath(c["dir"]), "command": s.get("command"),
                            "program_version": s.get("program_version"),
                            "settings": s.get("settings"), "probes": s.get("probes")}
         record["pairs"].append(entry)
-    record = _json_value(record)
+    record = json_value(record)
     record["program_versions"] = sorted({str(c["summary"].get("program_version", "unknown"))
                                          for c in campaigns})
 

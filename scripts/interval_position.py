@@ -49,8 +49,6 @@ Exit codes: 0 done, 1 bad input or command line (the message is printed, no trac
 """
 
 import argparse
-import csv
-import io
 import json
 import math
 import os
@@ -60,8 +58,9 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_plot import (UserError, format_mu, json_number, read_csv, read_json,  # noqa: E402
-                        require_dir, run_main, save_figure, warn, write_file_atomic)
+from unjam_plot import (UserError, csv_text, format_mu, json_number, json_value,  # noqa: E402
+                        read_csv, read_json, require_dir, run_main, save_figure, warn,
+                        write_file_atomic)
 
 SOLVED_RESIDUAL = 1e-3
 EXACT_RESIDUAL = 1e-6
@@ -237,31 +236,6 @@ def position(cd, bounds, label, tol):
     return pair, rows, ts, crit_over_cont
 
 
-def _cell(v):
-    if isinstance(v, float):
-        return "" if math.isnan(v) else repr(v)
-    return "" if v is None else str(v)
-
-
-def csv_text(rows, columns):
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(columns)
-    for r in rows:
-        w.writerow([_cell(r[c]) for c in columns])
-    return buf.getvalue()
-
-
-def _json_value(v):
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    if isinstance(v, dict):
-        return {k: _json_value(x) for k, x in v.items()}
-    if isinstance(v, list):
-        return [_json_value(x) for x in v]
-    return v
-
-
 def pair_name(p):
     if p["label"]:
         return p["label"]
@@ -334,7 +308,7 @@ def main():
         os.makedirs(a.out, exist_ok=True)
     except OSError as e:
         raise UserError(f"{a.out}: cannot create the directory: {e.strerror or e}") from None
-    record = _json_value({
+    record = json_value({
         "command": command, "inputs": inputs, "pairs": pairs,
         "rules": {"solved_residual_g": SOLVED_RESIDUAL, "exact_residual_g": EXACT_RESIDUAL,
                   "t": "(F_crit - fn_min) / (fn_max - fn_min), intervals wider than 1e-6 F0",

@@ -10,6 +10,7 @@ status 1, without a traceback.
 """
 
 import csv
+import io
 import json
 import math
 import os
@@ -337,6 +338,36 @@ def write_file_atomic(out, write, binary=False):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def csv_field(v):
+    """Full precision (repr) for floats, empty for NaN or None."""
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(v)
+    return v
+
+
+def csv_text(rows, columns):
+    """rows (dicts) as CSV text with a header of columns, floats at full precision."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow([csv_field(r[c]) for c in columns])
+    return buf.getvalue()
+
+
+def json_value(v):
+    """v with every non-finite float (NaN: no value) as None, for strict JSON."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, dict):
+        return {k: json_value(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [json_value(x) for x in v]
+    return v
 
 
 def save_figure(fig, out):

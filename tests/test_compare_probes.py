@@ -17,9 +17,8 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+from unjam_binary import REPO, UNJAM, read_rows, requires_unjam, run_script  # noqa: E402
 
-SCRIPT = os.path.join(REPO, "scripts", "compare_probes.py")
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 PACKINGS = ("p50-mu1", "p50-mu0.1")
 # The residual of a probe without a solution (unjam writes the largest double).
@@ -27,13 +26,7 @@ NO_SOLUTION = "1.7976931348623157e+308"
 
 
 def run(*args):
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
-                          cwd=REPO, timeout=120)
-
-
-def read_rows(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+    return run_script("compare_probes.py", *args)
 
 
 def probes(directory):

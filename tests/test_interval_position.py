@@ -17,21 +17,14 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+from unjam_binary import REPO, UNJAM, read_rows, requires_unjam, run_script  # noqa: E402
 
-SCRIPT = os.path.join(REPO, "scripts", "interval_position.py")
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 PACKINGS = ("p50-mu1", "p50-mu0.1")
 
 
 def run(*args):
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
-                          cwd=REPO, timeout=120)
-
-
-def read_rows(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
+    return run_script("interval_position.py", *args)
 
 
 def unjam(*args):

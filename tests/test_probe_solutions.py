@@ -8,16 +8,14 @@ import csv
 import json
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_binary import REPO, UNJAM, requires_unjam  # noqa: E402
+from unjam_binary import REPO, UNJAM, requires_unjam, run_script  # noqa: E402
 
-SCRIPT = os.path.join(REPO, "scripts", "probe_solutions.py")
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 
 
@@ -31,8 +29,7 @@ def reference():
 
 
 def run(*args):
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True,
-                          cwd=REPO, timeout=300)
+    return run_script("probe_solutions.py", *args, timeout=300)
 
 
 R = {}  # the run shared by the tests: its directory, arguments, rows and summary

@@ -1,7 +1,12 @@
 """The unjam binary the script tests drive: $UNJAM (ctest sets it to the build's own), else
-build/release/unjam; tests that need it are skipped when it is missing (`requires_unjam`)."""
+build/release/unjam; tests that need it are skipped when it is missing (`requires_unjam`).
+Also how they run a script of scripts/ (`run_script`) and read the CSV tables it writes
+(`read_rows`)."""
 
+import csv
 import os
+import subprocess
+import sys
 import unittest
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -11,3 +16,16 @@ requires_unjam = unittest.skipUnless(
     os.path.isfile(UNJAM) and os.access(UNJAM, os.X_OK),
     f"{UNJAM} is missing: build it first (cmake --build build/release -j2)")
 
+
+
+def run_script(script, *args, timeout=120):
+    """scripts/SCRIPT with args by this Python, from the repository root: the finished process
+    (stdout and stderr captured as text)."""
+    return subprocess.run([sys.executable, os.path.join(REPO, "scripts", script), *args],
+                          capture_output=True, text=True, cwd=REPO, timeout=timeout)
+
+
+def read_rows(path):
+    """The rows of a CSV table as dicts, by its header."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
