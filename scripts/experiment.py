@@ -22,7 +22,7 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
-  fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe lp`, plot_fig4.py;
+  fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe cd`, plot_fig4.py;
   probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
                --contact K`) and its displacement field drawn (plot_probe_field.py);
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),

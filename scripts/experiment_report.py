@@ -2,6 +2,7 @@
 paper's findings, parameters, timings and figures (OUT/report.md)."""
 
 import csv
+import json
 import math
 import os
 import time
@@ -81,6 +82,38 @@ def findings(agg, fixed_agg, n_max):
                     f"at mu = {fmt_mu(fmus[-1])}; monotonic: {'yes' if mono else 'no'}",
                     "agree" if mono else "disagree"))
     return out
+
+
+def fig4_finding(out):
+    """The Fig. 4 finding (F_crit at the top of each admissible interval, 50 disks, mu = 0.1)
+    from the ensemble stage's ensemble.json, as a row of findings(); None where the stage did
+    not run or did not probe. Agree: the probe is the paper's (nlgs or cd, not the lp stand-in,
+    which is fn_max by construction), F_crit / fn_max has a median of at least 0.98 and a
+    minimum of at least 0.9."""
+    path = os.path.join(out, "fig4", f"N{FIG4['n']}-mu{fmt_mu(FIG4['mu'])}-s{FIG4['seed']}",
+                        "ensemble.json")
+    try:
+        with open(path) as f:
+            probe = json.load(f).get("probe", {})
+    except (OSError, ValueError):
+        return None
+    ratio = probe.get("f_crit_over_fn_max")
+    if not isinstance(ratio, dict):
+        return None
+    method, n = probe.get("method"), probe.get("contacts_probed")
+    measured = (f"by the {method} probe on {n} contacts: F_crit / fn_max median "
+                f"{ratio['median']:.4f}, min {ratio['min']:.4f}; within 2 % of fn_max: "
+                f"{ratio['within_2_percent']}")
+    t = probe.get("position_in_interval")
+    if isinstance(t, dict):
+        measured += (f"; place in the interval t median {t['median']:.3f}, "
+                     f"{t['at_top']} at t >= 0.99")
+    if method == "lp":
+        return ("F_crit = max of the admissible interval (N = 50, mu = 0.1)",
+                "every contact", measured, "not measured (lp is fn_max by construction)")
+    ok = ratio["median"] >= 0.98 and ratio["min"] >= 0.9
+    return ("F_crit = max of the admissible interval (N = 50, mu = 0.1)", "every contact",
+            measured, "agree" if ok else "disagree")
 
 
 # What each start of the exact probe's path is (`unjam probe --cd-start`; docs/probe.md, "Where
@@ -164,12 +197,14 @@ def write_report(path, args, cfg, R, figures, command):
     L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
     L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
           "| finding | paper | measured | verdict |", "|---|---|---|---|"]
-    for f, paper, meas, verdict in findings(agg, fixed_agg, n_max):
+    fig4 = fig4_finding(out)
+    for f, paper, meas, verdict in findings(agg, fixed_agg, n_max) + ([fig4] if fig4 else []):
         L.append(f"| {f} | {paper} | {meas} | **{verdict}** |")
     L += ["", "Criteria: phi within 0.01 of 0.84 / 0.80 and monotonic (tolerance 0.002); z and "
           "<F_cont> monotonic (tolerance 2 %); alpha within [0.7, 1.4] with its maximum at "
           "0.05 <= mu <= 0.2; <F_crit>/<F_cont> within 0.1 of 1 at the ends with its maximum at "
-          "0.05 <= mu <= 0.2; fixed packing monotonic (tolerance 0.01).", "",
+          "0.05 <= mu <= 0.2; fixed packing monotonic (tolerance 0.01); Fig. 4 by the paper's probe "
+          "(not the lp stand-in): F_crit / fn_max median >= 0.98 and min >= 0.9.", "",
           "## Figures", ""]
     for title, f in figures:
         rel = os.path.relpath(f, out)
@@ -180,7 +215,7 @@ def write_report(path, args, cfg, R, figures, command):
           f"- probe: lp, g = {args.probe_g:g}, "
           + (f"{cfg['probe_sample']} contacts per packing (seeded subset)" if cfg["probe_sample"]
              else "every force-carrying contact"),
-          f"- exact probe (cd) beside lp: "
+          "- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
              f"--cd-start {cfg['cd_start']}"
              + "".join(f", {flag} {value}" for flag, value in pairs(cd_options(cfg)))

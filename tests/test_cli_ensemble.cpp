@@ -114,7 +114,7 @@ TEST(CliHelp, BoundsAndEnsembleShowTheirDefaults) {
   for (const char* d : {"--method TEXT:{hit-and-run,walk,both}=both", "--samples INT:NUMBER > 0=20000",
                         "--seed UINT:SEED=1", "--thin INT:NUMBER >= 0=0", "--burn-in INT:NUMBER >= 0=0",
                         "--kick FLOAT:NUMBER >= 0=1", "--walk-tol FLOAT:NUMBER > 0=1e-10",
-                        "--probe-g FLOAT:NUMBER > 0=1e-09", "--probe-dt FLOAT:NUMBER > 0=0.001",
+                        "--probe-g FLOAT:NUMBER > 0=1e-09", "--probe-dt FLOAT:NUMBER >= 0=0",
                         "--probe-velocity-tol FLOAT:NUMBER > 0=1e-06", "--gap-tol FLOAT:NUMBER >= 0=1e-09",
                         "--fn-tol FLOAT:NUMBER >= 0=1e-09", "--threads INT:NUMBER >= 0=0"})
     EXPECT_NE(e.output.find(d), std::string::npos) << d << " in\n" << e.output;

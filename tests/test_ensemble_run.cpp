@@ -7,7 +7,9 @@
 #include <string>
 
 #include "unjam/campaign/ensemble_run.hpp"
+#include "unjam/core/error.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam {
 namespace {
@@ -77,9 +79,10 @@ TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
   in.probe_dt = 2e-3;
   in.probe_velocity_tol = 1e-7;
   const CampaignSettings probe = campaign_settings_for(p);
-  for (const char* method : {"nlgs", "lp"}) {
+  for (const char* method : {"nlgs", "lp", "cd"}) {
     const CampaignSettings s = ensemble_probe_settings(p, in, method);
-    EXPECT_EQ(s.method, std::string(method) == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs);
+    const std::string m = method;
+    EXPECT_EQ(s.method, m == "lp" ? ProbeMethod::kLp : m == "cd" ? ProbeMethod::kCd : ProbeMethod::kNlgs);
     EXPECT_EQ(s.nlgs.model->M_lambda, 0.5);
     EXPECT_EQ(s.kinematic.model->M_lambda, 0.5);
     EXPECT_EQ(s.nlgs.model->touch_gap, 2e-6);
@@ -91,6 +94,46 @@ TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
     EXPECT_EQ(s.nlgs.dt, 2e-3);
     EXPECT_EQ(s.nlgs.velocity_tol, 1e-7);
   }
+  // Without a time step each method takes its own default: nlgs 1e-3, cd the quasi-static one.
+  in.probe_dt = 0.0;
+  EXPECT_EQ(ensemble_probe_settings(p, in, "nlgs").nlgs.dt, 1e-3);
+  EXPECT_EQ(ensemble_probe_settings(p, in, "cd").nlgs.dt, std::sqrt(2e-9 / kQuasiStaticInertia));
+}
+
+TEST(EnsembleRun, CdProbesAreThePapersProbeInsideTheirIntervals) {
+  // --probe cd: the exact step on every force-carrying contact, as `unjam probe --method cd`
+  // gives it (the same F_crit bit for bit), inside the contact's LP interval up to the step's
+  // inertia at the quasi-static dt, and near its top at 50 disks, mu = 0.1 (measured: F_crit /
+  // fn_max median 0.993, min 0.946; t median 0.991, 44 of 81 at t >= 0.99; docs/probe.md,
+  // "Where F_crit lies in the admissible interval").
+  const Packing& p = fixture_p50();
+  EnsembleSettings s = lp_hit_and_run(2);
+  s.hit_and_run = false;
+  s.probe = "cd";
+  const EnsembleReport r = compute_ensemble(p, s);
+  EXPECT_EQ(r.probe, "cd");
+  EXPECT_EQ(r.probe_dt, default_probe_dt(ProbeMethod::kCd, s.probe_g));
+  EXPECT_EQ(r.unconverged, 0);
+  const double F0 = r.system.F0;
+  const CampaignSettings cd = ensemble_probe_settings(p, s, "cd");
+  int probed = 0;
+  for (int k = 0; k < r.system.num_contacts(); ++k) {
+    if (!r.probes[k]) continue;
+    ++probed;
+    const double f = r.probes[k]->f_crit;
+    EXPECT_GE(f, r.bounds.fn_min[k] - 1e-4 * F0) << "contact " << k;
+    EXPECT_LE(f, r.bounds.fn_max[k] + 1e-4 * F0) << "contact " << k;
+    if (probed % 20 == 1) EXPECT_EQ(probe_contact(p, cd, r.system.contacts[k]).f_crit, f) << "contact " << k;
+  }
+  EXPECT_EQ(probed, 81);
+  ASSERT_EQ(static_cast<int>(r.f_crit_position.size()), 81);
+  EXPECT_GT(quantile(r.f_crit_over_fn_max, 0.5), 0.98);
+  EXPECT_LT(quantile(r.f_crit_over_fn_max, 0.5), 1.0);
+  EXPECT_GT(quantile(r.f_crit_position, 0.5), 0.98);
+  EXPECT_EQ(r.below_f_cont, 0);
+
+  s.probe = "nlgs-fast";
+  EXPECT_THROW(compute_ensemble(p, s), Error);
 }
 
 TEST(EnsembleRun, NoProbeAndQuantiles) {

@@ -115,6 +115,17 @@ class ExperimentTiny(unittest.TestCase):
         # the verdict on <F_crit>/<F_cont> names the mu of the measured maximum
         mu_max = max(rows, key=lambda k: float(rows[k]["F_crit_over_F_cont"]))
         self.assertIn(f"maximum of <F_crit>/<F_cont> at mu = {mu_max} ", report)
+        # Fig. 4 by the paper's probe, exact: its row is read from the ensemble stage's output
+        with open(os.path.join(self.out, "fig4", "N50-mu0.1-s3", "ensemble.json")) as f:
+            probe = json.load(f)["probe"]
+        self.assertEqual(probe["method"], "cd")
+        self.assertEqual(probe["unconverged"], 0)
+        ratio = probe["f_crit_over_fn_max"]
+        self.assertIn(f"by the cd probe on {probe['contacts_probed']} contacts: F_crit / fn_max "
+                      f"median {ratio['median']:.4f}, min {ratio['min']:.4f}", report)
+        verdict = "agree" if ratio["median"] >= 0.98 and ratio["min"] >= 0.9 else "disagree"
+        self.assertRegex(report, r"\| F_crit = max of the admissible interval \(N = 50, mu = 0\.1\) "
+                         r"\|.*\| \*\*" + verdict + r"\*\* \|")
 
     def test_3_rerun_skips_everything(self):
         res = outcomes(run(self.out))

@@ -15,6 +15,7 @@
 //   DIR/ensemble.json  eta and coverage of the LP widths per method, F_crit / fn_max
 //                      statistics, settings, timings, version, command line;
 //   DIR/ensemble-samples.csv with --write-samples (hit-and-run samples: fn of every contact).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -35,6 +36,7 @@
 #include "unjam/core/version.hpp"
 #include "unjam/packing/csv_table.hpp"
 #include "unjam/packing/packing_io.hpp"
+#include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam::cli {
 
@@ -136,8 +138,9 @@ nlohmann::ordered_json probe_json(const EnsembleSettings& s, const EnsembleRepor
   const std::vector<double>& ratio = r.f_crit_over_fn_max;
   j["contacts_probed"] = ratio.size();
   j["unconverged"] = r.unconverged;
-  j["settings"] = {{"g", s.probe_g}, {"dt", s.probe_dt}, {"velocity_tol_g_per_dt", s.probe_velocity_tol},
-                   {"threads", s.threads}};
+  j["settings"] = {{"g", s.probe_g}, {"dt", r.probe_dt}, {"threads", s.threads}};
+  if (r.probe == "nlgs") j["settings"]["velocity_tol_g_per_dt"] = s.probe_velocity_tol;
+  if (r.probe == "cd") j["settings"]["start"] = cd_start_name(CdPathSettings{}.start);  // the default
   if (!ratio.empty()) {
     const CriticalForceRatio c = critical_force_ratio(ratio);
     j["f_crit_over_fn_max"] = {{"min", c.min},
@@ -147,6 +150,13 @@ nlohmann::ordered_json probe_json(const EnsembleSettings& s, const EnsembleRepor
                                {"within_2_percent", c.within_2_percent},
                                {"within_5_percent", c.within_5_percent}};
   }
+  const std::vector<double>& t = r.f_crit_position;
+  if (!t.empty())
+    j["position_in_interval"] = {
+        {"min", quantile(t, 0.0)},
+        {"median", quantile(t, 0.5)},
+        {"at_top", std::count_if(t.begin(), t.end(), [](double x) { return x >= 0.99; })}};
+  j["below_f_cont"] = r.below_f_cont;
   j["seconds"] = r.probe_seconds;
   return j;
 }
@@ -164,6 +174,13 @@ void print_summary(const EnsembleSettings& s, const EnsembleReport& r, const nlo
                 r.probe.c_str(), r.f_crit_over_fn_max.size(), r.unconverged, f["min"].get<double>(),
                 f["median"].get<double>(), f["max"].get<double>(), f["within_1_percent"].get<int>(),
                 f["within_2_percent"].get<int>(), f["within_5_percent"].get<int>(), r.probe_seconds);
+  }
+  if (j["probe"].contains("position_in_interval")) {
+    const auto& t = j["probe"]["position_in_interval"];
+    std::printf("F_crit in its interval, t = (F_crit - fn_min) / (fn_max - fn_min): min %.4g, "
+                "median %.4g, %d at the top (t >= 0.99); %d below f_cont\n",
+                t["min"].get<double>(), t["median"].get<double>(), t["at_top"].get<int>(),
+                j["probe"]["below_f_cont"].get<int>());
   }
   std::printf("total %.3g s\n", j["timings_s"]["total"].get<double>());
 }
@@ -223,9 +240,9 @@ void add_ensemble_command(CLI::App& app) {
   cmd->add_option("--method", opt->method, "sampler: hit-and-run, walk or both")
       ->capture_default_str()->check(CLI::IsMember({"hit-and-run", "walk", "both"}));
   cmd->add_option("--probe", opt->settings.probe,
-                  "F_crit of every force-carrying contact: nlgs, lp or none (default: nlgs up "
-                  "to 200 contacts, else lp)")
-      ->check(CLI::IsMember({"nlgs", "lp", "none"}));
+                  "F_crit of every force-carrying contact: nlgs, lp, cd (the exact step) or none "
+                  "(default: nlgs up to 200 contacts, else lp)")
+      ->check(CLI::IsMember({"nlgs", "lp", "cd", "none"}));
   cmd->add_option("--samples", opt->settings.samples, "networks to sample (walk: steps)")
       ->capture_default_str()->check(positive_number());
   cmd->add_option("--seed", opt->settings.seed, "seed of both samplers")->capture_default_str()->check(seed_value());
@@ -239,8 +256,9 @@ void add_ensemble_command(CLI::App& app) {
   cmd->add_option("--walk-tol", opt->settings.walk_tol, "walk relaxation residual target (F0)")
       ->capture_default_str()->check(positive_number());
   cmd->add_option("--probe-g", opt->settings.probe_g, "probe opening g (R_max)")->capture_default_str()->check(positive_number());
-  cmd->add_option("--probe-dt", opt->settings.probe_dt, "nlgs probe time step (t0)")
-      ->capture_default_str()->check(positive_number());
+  cmd->add_option("--probe-dt", opt->settings.probe_dt,
+                  "probe time step (t0; 0: nlgs 1e-3, cd the quasi-static sqrt(g / 1e-5))")
+      ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--probe-velocity-tol", opt->settings.probe_velocity_tol,
                   "nlgs probe convergence: max |dU| per sweep below this times g / dt")
       ->capture_default_str()->check(positive_number());

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "unjam/core/error.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam {
@@ -45,6 +46,7 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
       contacts.push_back(sys.contacts[k]);
     }
   const CampaignSettings s = ensemble_probe_settings(packing, in, r.probe);
+  r.probe_dt = s.method == ProbeMethod::kLp ? 0.0 : s.nlgs.dt;
   const std::string what = "probe " + r.probe + " (contacts)";
   const auto t0 = std::chrono::steady_clock::now();
   const int saved = omp_get_max_threads();
@@ -65,6 +67,9 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
   for (int k = 0; k < sys.num_contacts(); ++k)
     if (const auto& p = r.probes[k]) {
       r.f_crit_over_fn_max.push_back(p->f_crit / r.bounds.fn_max[k]);
+      const double width = r.bounds.fn_max[k] - r.bounds.fn_min[k];
+      if (width > 1e-6 * sys.F0) r.f_crit_position.push_back((p->f_crit - r.bounds.fn_min[k]) / width);
+      r.below_f_cont += p->f_crit < p->f_cont ? 1 : 0;
       r.unconverged += p->converged ? 0 : 1;
     }
 }
@@ -87,9 +92,9 @@ ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettin
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& in,
                                          const std::string& method) {
   CampaignSettings s = campaign_settings_for(packing);
-  s.method = method == "lp" ? ProbeMethod::kLp : ProbeMethod::kNlgs;
+  s.method = method == "lp" ? ProbeMethod::kLp : method == "cd" ? ProbeMethod::kCd : ProbeMethod::kNlgs;
   s.nlgs.g = s.kinematic.g = in.probe_g;
-  s.nlgs.dt = in.probe_dt;
+  s.nlgs.dt = in.probe_dt > 0.0 ? in.probe_dt : default_probe_dt(s.method, in.probe_g);
   s.nlgs.velocity_tol = in.probe_velocity_tol;
   return s;  // P_ext: the nlgs probe takes the packing's own (probe/nlgs_probe)
 }
@@ -98,6 +103,8 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   EnsembleReport r;
   r.system = admissible_system(packing, ensemble_contact_model(packing, in), in.fn_tol);
   const EquilibriumSystem& sys = r.system;
+  if (!in.probe.empty() && in.probe != "nlgs" && in.probe != "lp" && in.probe != "cd" && in.probe != "none")
+    throw Error("the ensemble's probe must be nlgs, lp, cd or none (got '" + in.probe + "')");
   r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "nlgs" : "lp";
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
   ForceBoundsOptions lp;

@@ -27,14 +27,18 @@ namespace unjam {
 
 struct EnsembleSettings {
   bool hit_and_run = true, walk = true;  // the samplers to run
-  std::string probe;              // nlgs | lp | none; empty: nlgs up to 200 contacts, else lp
+  // nlgs | lp | cd | none; empty: nlgs up to 200 contacts, else lp. cd: the exact step from the
+  // static network (probe/cd_path, docs/probe.md), the paper's probe without NLGS's sweeps.
+  std::string probe;
   int samples = 20000;            // networks per sampler (walk: steps)
   std::uint64_t seed = 1;         // of both samplers
   int thin = 0, burn_in = 0;      // hit-and-run (HitAndRunOptions)
   double kick = 1.0;              // walk kick amplitude / <F_n>
   double walk_tol = 1e-10;        // walk relaxation residual / F0
   double probe_g = 1e-9;          // probe opening (R_max)
-  double probe_dt = 1e-3;         // nlgs probe time step (t0)
+  // Probe time step (t0); 0: the method's own default, default_probe_dt (nlgs 1e-3, cd the
+  // quasi-static sqrt(g / kQuasiStaticInertia)).
+  double probe_dt = 0.0;
   double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
   double gap_tol = 1e-9;          // admissible set: touching, gap < gap_tol (R_max) ...
   double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
@@ -57,9 +61,15 @@ struct EnsembleReport {
   std::optional<HitAndRunResult> hit_and_run;
   std::optional<RandomWalkResult> walk;
   std::optional<SamplerReport> hr_columns, walk_columns;
-  std::string probe;                  // the probe method used: nlgs, lp or none
+  std::string probe;                  // the probe method used: nlgs, lp, cd or none
+  double probe_dt = 0.0;              // the time step the probes used (t0; lp: none, 0)
   std::vector<std::optional<ProbeResult>> probes;  // per contact of the system (force-carrying)
   std::vector<double> f_crit_over_fn_max;          // over the probed contacts, in system order
+  // t = (F_crit - fn_min) / (fn_max - fn_min), F_crit's place in the contact's interval (1: its
+  // top, the paper's finding), over the probed contacts whose interval is wider than 1e-6 F0
+  // (docs/probe.md, "Where F_crit lies in the admissible interval").
+  std::vector<double> f_crit_position;
+  int below_f_cont = 0;               // probes with F_crit < f_cont
   int unconverged = 0;                // probes that did not converge
   double probe_seconds = 0.0;
 };
