@@ -4,7 +4,6 @@ Run from the repository root:  /usr/bin/python3 -m unittest tests/test_compare_p
 The unjam binary: tests/unjam_binary.py.
 """
 
-import csv
 import json
 import math
 import os
@@ -18,6 +17,7 @@ import unittest
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from unjam_binary import REPO, UNJAM, read_rows, requires_unjam, run_script  # noqa: E402
+from unjam_binary import edit_rows as edit_csv  # noqa: E402
 
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 PACKINGS = ("p50-mu1", "p50-mu0.1")
@@ -55,15 +55,7 @@ def copy_campaign(src, name, edit_rows=None, edit_summary=None):
     dst = os.path.join(R["tmp"], name)
     shutil.copytree(src, dst)
     if edit_rows:
-        path = os.path.join(dst, "probes.csv")
-        with open(path, newline="") as f:
-            reader = csv.DictReader(f)
-            columns, rows = reader.fieldnames, list(reader)
-        edit_rows(rows)
-        with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=columns, lineterminator="\n")
-            w.writeheader()
-            w.writerows(rows)
+        edit_csv(os.path.join(dst, "probes.csv"), edit_rows)
     if edit_summary:
         path = os.path.join(dst, "probe_summary.json")
         with open(path) as f:
@@ -337,13 +329,7 @@ class ComparePairs(unittest.TestCase):
         cd_src = R["cd"]["p50-mu0.1"]
         path = copy_campaign(cd_src, "cd-old", edit_summary=lambda s: s["settings"].update(
             max_inertia_F0=1e-30))
-        with open(os.path.join(path, "probes.csv"), newline="") as f:
-            rows = list(csv.DictReader(f))
-        drop(rows)
-        with open(os.path.join(path, "probes.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
-            w.writeheader()
-            w.writerows(rows)
+        edit_csv(os.path.join(path, "probes.csv"), drop)
         out = os.path.join(R["tmp"], "compare-old")
         p = run(path, R["lp"]["p50-mu0.1"], "--out", out)
         self.assertEqual(p.returncode, 0, p.stderr)

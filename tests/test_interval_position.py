@@ -4,7 +4,6 @@ Run from the repository root:  /usr/bin/python3 -m unittest tests/test_interval_
 The unjam binary: tests/unjam_binary.py.
 """
 
-import csv
 import json
 import math
 import os
@@ -17,7 +16,7 @@ import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_binary import REPO, UNJAM, read_rows, requires_unjam, run_script  # noqa: E402
+from unjam_binary import REPO, UNJAM, edit_rows, read_rows, requires_unjam, run_script  # noqa: E402
 
 FIXTURES = os.path.join(REPO, "tests", "fixtures")
 PACKINGS = ("p50-mu1", "p50-mu0.1")
@@ -71,15 +70,7 @@ def edited_copy(src, name, edit):
     dst = os.path.join(R["tmp"], name)
     shutil.rmtree(dst, ignore_errors=True)
     shutil.copytree(src, dst)
-    path = os.path.join(dst, "probes.csv")
-    with open(path, newline="") as f:
-        reader = csv.DictReader(f)
-        columns, rows = reader.fieldnames, list(reader)
-    edit(rows)
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=columns, lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
+    edit_rows(os.path.join(dst, "probes.csv"), edit)
     return dst
 
 

@@ -1,7 +1,7 @@
 """The unjam binary the script tests drive: $UNJAM (ctest sets it to the build's own), else
 build/release/unjam; tests that need it are skipped when it is missing (`requires_unjam`).
-Also how they run a script of scripts/ (`run_script`) and read the CSV tables it writes
-(`read_rows`)."""
+Also how they run a script of scripts/ (`run_script`), read the CSV tables it writes
+(`read_rows`) and change one in place (`edit_rows`)."""
 
 import csv
 import os
@@ -29,3 +29,15 @@ def read_rows(path):
     """The rows of a CSV table as dicts, by its header."""
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
+
+
+def edit_rows(path, edit):
+    """The CSV table at path changed in place: edit(rows) edits its rows (dicts, by its header)."""
+    with open(path, newline="") as f:
+        reader = csv.DictReader(f)
+        columns, rows = reader.fieldnames, list(reader)
+    edit(rows)
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
