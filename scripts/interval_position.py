@@ -31,12 +31,12 @@ relative); every probed contact must be in BOUNDS (both made from one packing).
 Outputs, each written atomically, in OUT (default interval-position):
   OUT/interval.csv   one row per pair: packing (the last component of the campaign's
                      packing directory; interval.json has the whole commands), mu, N,
-                     seed, label, probes, solved, exact, below_f_cont, zero_force,
-                     outside, t_median, t_q1, t_q3, t_min,
-                     t_cont_median, at_top (t >= 0.99), can_open (fn_min = 0),
-                     excess_max (max (F_crit - fn_max) / fn_max), shortfall_max
-                     (max (fn_min - F_crit) / fn_max), crit_over_max_median (the median of
-                     F_crit / fn_max, as compare_probes.py's ratio_median)
+                     seed, label, probes (all), then over the solved probes only:
+                     solved, exact, below_f_cont, zero_force, outside, t_median, t_q1,
+                     t_q3, t_min, t_cont_median, at_top (t >= 0.99), can_open (their
+                     contact has fn_min = 0), excess_max (max (F_crit - fn_max) / fn_max),
+                     shortfall_max (max (fn_min - F_crit) / fn_max), crit_over_max_median
+                     (the median of F_crit / fn_max, as compare_probes.py's ratio_median)
   OUT/positions.csv  one row per probed contact: packing, mu, N, seed, contact, f_cont,
                      fn_min, fn_max, f_crit (all in F0), t, t_cont, residual, solved, exact
   OUT/interval.md    the table in Markdown, with the command
