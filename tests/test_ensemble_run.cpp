@@ -101,15 +101,15 @@ TEST(EnsembleRun, ProbesUseThePackingsOwnContactModel) {
 }
 
 TEST(EnsembleRun, CdProbesAreThePapersProbeInsideTheirIntervals) {
-  // --probe cd: the exact step on every force-carrying contact, as `unjam probe --method cd`
-  // gives it (the same F_crit bit for bit), inside the contact's LP interval up to the step's
-  // inertia at the quasi-static dt, and near its top at 50 disks, mu = 0.1 (measured: F_crit /
-  // fn_max median 0.993, min 0.946; t median 0.991, 44 of 81 at t >= 0.99; docs/probe.md,
-  // "Where F_crit lies in the admissible interval").
+  // --probe cd, the default up to 200 contacts: the exact step on every force-carrying
+  // contact, as `unjam probe --method cd` gives it (the same F_crit bit for bit), inside the
+  // contact's LP interval up to the step's inertia at the quasi-static dt, and near its top at
+  // 50 disks, mu = 0.1 (measured: F_crit / fn_max median 0.993, min 0.946; t median 0.991, 44
+  // of 81 at t >= 0.99; docs/probe.md, "Where F_crit lies in the admissible interval").
   const Packing& p = fixture_p50();
   EnsembleSettings s = lp_hit_and_run(2);
   s.hit_and_run = false;
-  s.probe = "cd";
+  s.probe = "";  // the default up to 200 contacts
   const EnsembleReport r = compute_ensemble(p, s);
   EXPECT_EQ(r.probe, "cd");
   EXPECT_EQ(r.probe_dt, default_probe_dt(ProbeMethod::kCd, s.probe_g));

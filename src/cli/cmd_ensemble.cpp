@@ -241,7 +241,7 @@ void add_ensemble_command(CLI::App& app) {
       ->capture_default_str()->check(CLI::IsMember({"hit-and-run", "walk", "both"}));
   cmd->add_option("--probe", opt->settings.probe,
                   "F_crit of every force-carrying contact: nlgs, lp, cd (the exact step) or none "
-                  "(default: nlgs up to 200 contacts, else lp)")
+                  "(default: cd up to 200 contacts, else lp)")
       ->check(CLI::IsMember({"nlgs", "lp", "cd", "none"}));
   cmd->add_option("--samples", opt->settings.samples, "networks to sample (walk: steps)")
       ->capture_default_str()->check(positive_number());

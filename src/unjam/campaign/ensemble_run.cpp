@@ -105,7 +105,7 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   const EquilibriumSystem& sys = r.system;
   if (!in.probe.empty() && in.probe != "nlgs" && in.probe != "lp" && in.probe != "cd" && in.probe != "none")
     throw Error("the ensemble's probe must be nlgs, lp, cd or none (got '" + in.probe + "')");
-  r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "nlgs" : "lp";
+  r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "cd" : "lp";
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
   ForceBoundsOptions lp;
   lp.threads = threads;
