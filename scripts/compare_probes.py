@@ -70,7 +70,6 @@ f_cont); a pair must share at least one contact.
 Exit codes: 0 done, 1 bad input or command line (the message is printed, no traceback).
 """
 
-import argparse
 import json
 import math
 import os
@@ -82,7 +81,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from campaign_time import cpu_per_probe  # noqa: E402
 from plot_exact_sweep import friction_figure  # noqa: E402
-from unjam_plot import (UserError, csv_text, json_number, json_value, read_csv,  # noqa: E402
+from unjam_plot import (ArgumentParser, UserError, csv_text, json_number, json_value, read_csv,  # noqa: E402
                         read_json, require_dir, run_main, save_figure, warn,
                         write_file_atomic)
 
@@ -104,15 +103,8 @@ RATIO_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "f_crit_lp",
                  "ratio", "residual_cd", "exact", "solved", "f_inertia_cd", "inertial"]
 
 
-class Parser(argparse.ArgumentParser):
-    """Command-line errors as UserError: one message, exit status 1."""
-
-    def error(self, message):
-        raise UserError(message)
-
-
 def parse(argv):
-    ap = Parser(prog="compare_probes.py", description=__doc__.split("\n")[0])
+    ap = ArgumentParser(prog="compare_probes.py", description=__doc__.split("\n")[0])
     ap.add_argument("dirs", nargs="+", metavar="CD_DIR LP_DIR",
                     help="pairs of probe campaign directories: cd first, lp second")
     ap.add_argument("--out", default="compare-probes",
@@ -146,15 +138,16 @@ def _integer_column(t, name, path):
     return [int(x) for x in v]
 
 
-def read_campaign(directory, method):
-    """A probe campaign: {dir, summary, rows: {contact: row dict}} checked to be of method."""
+def read_campaign(directory, method, pairs="CD_DIR LP_DIR: cd first, lp second"):
+    """A probe campaign: {dir, summary, rows: {contact: row dict}} checked to be of method;
+    `pairs` says in its error what the command line pairs."""
     require_dir(directory)
     spath = os.path.join(directory, "probe_summary.json")
     summary = read_json(spath)
     got = summary.get("method")
     if got != method:
         raise UserError(f"{directory}: a campaign of method {got!r}, expected {method!r} "
-                        f"(each pair is CD_DIR LP_DIR: cd first, lp second)")
+                        f"(each pair is {pairs})")
     if not isinstance(summary.get("packing"), str) or not summary["packing"]:
         raise UserError(f"{spath}: missing 'packing'")
     ppath = os.path.join(directory, "probes.csv")

@@ -48,7 +48,6 @@ Outputs, each written atomically, in OUT (default interval-position):
 Exit codes: 0 done, 1 bad input or command line (the message is printed, no traceback).
 """
 
-import argparse
 import json
 import math
 import os
@@ -58,12 +57,11 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from unjam_plot import (UserError, csv_text, format_mu, json_number, json_value,  # noqa: E402
-                        read_csv, read_json, require_dir, run_main, save_figure, warn,
-                        write_file_atomic)
+from compare_probes import EXACT_RESIDUAL, SOLVED_RESIDUAL, read_campaign  # noqa: E402
+from unjam_plot import (ArgumentParser, UserError, csv_text, format_mu,  # noqa: E402
+                        json_number, json_value, read_csv, read_json, run_main, save_figure,
+                        warn, write_file_atomic)
 
-SOLVED_RESIDUAL = 1e-3
-EXACT_RESIDUAL = 1e-6
 F_REL_TOL = 1e-9          # f_cont against bounds' fn of one contact: one packing
 MIN_WIDTH_F0 = 1e-6       # narrower intervals have no t
 ZERO_FORCE = 1e-3         # F_crit below this fraction of f_cont opens with no force
@@ -77,13 +75,8 @@ POSITION_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "fn_min",
                     "f_crit", "t", "t_cont", "residual", "solved", "exact"]
 
 
-class Parser(argparse.ArgumentParser):
-    def error(self, message):
-        raise UserError(message)
-
-
 def parse(argv):
-    ap = Parser(prog="interval_position.py", description=__doc__.split("\n")[0])
+    ap = ArgumentParser(prog="interval_position.py", description=__doc__.split("\n")[0])
     ap.add_argument("inputs", nargs="+", metavar="CD_DIR BOUNDS",
                     help="pairs: a cd probe campaign and the packing's bounds.csv")
     ap.add_argument("--out", default="interval-position", help="output directory")
@@ -102,26 +95,10 @@ def parse(argv):
 
 
 def read_cd(directory):
-    require_dir(directory)
-    spath = os.path.join(directory, "probe_summary.json")
-    summary = read_json(spath)
-    if summary.get("method") != "cd":
-        raise UserError(f"{directory}: a campaign of method {summary.get('method')!r}, "
-                        f"expected 'cd' (each pair is CD_DIR BOUNDS)")
-    F0 = json_number(summary, "F0", spath, positive=True)
-    ppath = os.path.join(directory, "probes.csv")
-    t = read_csv(ppath, ["contact", "a", "b", "f_cont", "f_crit", "residual"],
-                 allow_nan=["f_crit"], min_rows=1)
-    rows = []
-    for i in range(len(t["contact"])):
-        rows.append({k: float(t[k][i]) for k in ("contact", "a", "b", "f_cont", "f_crit",
-                                                  "residual")})
-    seen = set()
-    for r in rows:
-        if r["contact"] in seen:
-            raise UserError(f"{ppath}: contact {int(r['contact'])} appears twice")
-        seen.add(r["contact"])
-    return {"dir": directory, "summary": summary, "F0": F0, "rows": rows}
+    """A cd campaign (compare_probes.read_campaign) and its force unit F0."""
+    cd = read_campaign(directory, "cd", pairs="CD_DIR BOUNDS")
+    cd["F0"] = json_number(cd["summary"], "F0", cd["summary_path"], positive=True)
+    return cd
 
 
 def read_bounds(path):
@@ -147,8 +124,7 @@ def join(cd, bounds):
             raise UserError(f"{cd['dir']} and {bounds['path']} come from different packings: "
                             f"{key} {s[key]} and {bounds['meta'][key]}")
     out = []
-    for r in cd["rows"]:
-        k = int(r["contact"])
+    for k, r in sorted(cd["rows"].items()):
         cands = [b for b in bounds["by_pair"].get((int(r["a"]), int(r["b"])), [])
                  if abs(b["fn"] - r["f_cont"]) <= F_REL_TOL * max(abs(r["f_cont"]), 1.0)]
         if not cands:
@@ -159,7 +135,7 @@ def join(cd, bounds):
         if len(cands) > 1:
             raise UserError(f"{bounds['path']}: two intervals match contact {k} (grains "
                             f"{int(r['a'])}-{int(r['b'])}) of {cd['dir']}")
-        out.append((r, cands[0]))
+        out.append((k, r, cands[0]))
     return out
 
 
@@ -182,7 +158,7 @@ def position(cd, bounds, label, tol):
          "at_top": 0, "can_open": 0}
     excess = shortfall = -math.inf
     outside = []
-    for r, b in join(cd, bounds):
+    for k, r, b in join(cd, bounds):
         solved = r["residual"] <= SOLVED_RESIDUAL
         exact = r["residual"] <= EXACT_RESIDUAL
         width = b["fn_max"] - b["fn_min"]
@@ -193,7 +169,7 @@ def position(cd, bounds, label, tol):
                 t = (r["f_crit"] - b["fn_min"]) / width
         if solved:
             if not math.isfinite(r["f_crit"]):
-                raise UserError(f"{cd['dir']}/probes.csv: contact {int(r['contact'])} is "
+                raise UserError(f"{cd['dir']}/probes.csv: contact {k} is "
                                 f"solved but its f_crit is not a number")
             n["solved"] += 1
             n["exact"] += exact
@@ -205,7 +181,7 @@ def position(cd, bounds, label, tol):
             excess, shortfall = max(excess, e), max(shortfall, d)
             if e > tol or d > tol:
                 n["outside"] += 1
-                outside.append(int(r["contact"]))
+                outside.append(k)
             if math.isfinite(t):
                 ts.append(t)
                 n["at_top"] += t >= AT_TOP
@@ -215,7 +191,7 @@ def position(cd, bounds, label, tol):
                 crit_over_cont.append(r["f_crit"] / r["f_cont"])
             if b["fn_max"] > 0:
                 crit_over_max.append(r["f_crit"] / b["fn_max"])
-        rows.append({**packing, "contact": int(r["contact"]), "f_cont": r["f_cont"] / F0,
+        rows.append({**packing, "contact": k, "f_cont": r["f_cont"] / F0,
                      "fn_min": b["fn_min"] / F0, "fn_max": b["fn_max"] / F0,
                      "f_crit": r["f_crit"] / F0, "t": t, "t_cont": t_cont,
                      "residual": r["residual"], "solved": int(solved), "exact": int(exact)})

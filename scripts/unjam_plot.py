@@ -9,6 +9,7 @@ main() through run_main(), which prints "SCRIPT: error: MESSAGE" to stderr and e
 status 1, without a traceback.
 """
 
+import argparse
 import csv
 import io
 import json
@@ -43,6 +44,13 @@ def run_main(main):
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         sys.exit(130)
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with command-line errors as UserError: one message, exit status 1."""
+
+    def error(self, message):
+        raise UserError(message)
 
 
 def warn(message):

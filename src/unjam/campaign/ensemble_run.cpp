@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "unjam/core/error.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam {
@@ -92,7 +91,7 @@ ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettin
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& in,
                                          const std::string& method) {
   CampaignSettings s = campaign_settings_for(packing);
-  s.method = method == "lp" ? ProbeMethod::kLp : method == "cd" ? ProbeMethod::kCd : ProbeMethod::kNlgs;
+  s.method = method_from_name(method);
   s.nlgs.g = s.kinematic.g = in.probe_g;
   s.nlgs.dt = in.probe_dt > 0.0 ? in.probe_dt : default_probe_dt(s.method, in.probe_g);
   s.nlgs.velocity_tol = in.probe_velocity_tol;
@@ -103,9 +102,8 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   EnsembleReport r;
   r.system = admissible_system(packing, ensemble_contact_model(packing, in), in.fn_tol);
   const EquilibriumSystem& sys = r.system;
-  if (!in.probe.empty() && in.probe != "nlgs" && in.probe != "lp" && in.probe != "cd" && in.probe != "none")
-    throw Error("the ensemble's probe must be nlgs, lp, cd or none (got '" + in.probe + "')");
   r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "cd" : "lp";
+  if (r.probe != "none") method_from_name(r.probe);  // an unknown name is refused before the LPs
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
   ForceBoundsOptions lp;
   lp.threads = threads;

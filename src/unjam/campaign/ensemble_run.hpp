@@ -27,9 +27,10 @@ namespace unjam {
 
 struct EnsembleSettings {
   bool hit_and_run = true, walk = true;  // the samplers to run
-  // nlgs | lp | cd | none; empty: cd up to 200 contacts, else lp. cd: the exact step from the
-  // static network (probe/cd_path, docs/probe.md), the paper's probe without NLGS's sweeps
-  // (1.3 s for the 81 contacts of the 50-disk fixture, where NLGS takes minutes).
+  // a probe method's name (probe/probe_campaign: method_from_name) or none; empty: cd up to
+  // 200 contacts, else lp. cd: the exact step from the static network (probe/cd_path,
+  // docs/probe.md), the paper's probe without NLGS's sweeps (1.3 s for the 81 contacts of
+  // the 50-disk fixture, where NLGS takes minutes).
   std::string probe;
   int samples = 20000;            // networks per sampler (walk: steps)
   std::uint64_t seed = 1;         // of both samplers
@@ -81,12 +82,14 @@ struct EnsembleReport {
 ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettings& settings);
 
 // Every part of the ensemble of `packing` with `settings`. Throws unjam::Error as the
-// samplers and probes do (the probes' errors name the contact).
+// samplers and probes do (the probes' errors name the contact), and for an unknown probe
+// name before any LP.
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& settings);
 
 // The probes' settings: the packing's own contact model (touch gap and bath mass from its
 // metadata, as `unjam probe` takes them: campaign_settings_for) with the ensemble's opening
-// g, time step and NLGS tolerance, and `method` (nlgs or lp).
+// g, time step (0: the method's default_probe_dt) and NLGS tolerance, and `method` (a name
+// of method_from_name).
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
                                          const std::string& method);
 
