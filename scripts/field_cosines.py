@@ -2,7 +2,8 @@
 
 Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
                      (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
-                     [--cd-start static|compliant|interior] [--g G] [--dt DT] [--threads T]
+                     [--cd-start static|compliant|interior] [--cd-max-pieces M]
+                     [--cd-compliant-start C] [--g G] [--dt DT] [--threads T]
                      [--chunk C] [--out DIR]
 
 The lp probe (`--method lp`) takes F_crit as the LP maximum and its field from the LP
@@ -38,6 +39,14 @@ Outputs, in DIR (default PACKING-fields):
 
 --from-campaign takes the contacts of a campaign's probes.csv in its order (e.g. the
 `--sample 300 --seed 1` campaign whose F_crit the docs tabulate), --limit the first M of them.
+Where that is a cd campaign (its probe_summary.json beside probes.csv says method cd), its own
+g, dt and cd settings (start, budget of pieces, first compliance, the interior start's
+settings, as the campaign recorded them) probe the contacts again, so the cd probes are the
+campaign's: fields.json's `campaign_check` counts the contacts whose F_crit(cd) equals the
+campaign's bit for bit (a warning names the others: a campaign made by another build, or
+settings it did not record). The options --cd-start, --cd-max-pieces, --cd-compliant-start,
+--g and --dt are refused with such a campaign; with --contacts, or an lp campaign, they apply
+(defaults: compliant start, no budget, first compliance 0.1, g = 1e-9, the quasi-static dt).
 Exit codes: 0 done, 1 bad input or a failed probe (its message is printed), 3 interrupted
 (run the same command again to resume).
 """
@@ -85,11 +94,18 @@ def parse(argv):
     sel.add_argument("--from-campaign", metavar="PROBES_CSV",
                      help="the contacts of a campaign's probes.csv, in its order")
     ap.add_argument("--limit", type=int, help="with --from-campaign: the first M contacts only")
-    ap.add_argument("--cd-start", choices=("static", "compliant", "interior"), default="compliant",
+    ap.add_argument("--cd-start", choices=("static", "compliant", "interior"),
                     help="where the exact probe's path starts (default compliant; interior: from "
                          "an interior-point iterate, faster at 500 disks and beyond: docs/probe.md, "
-                         "\"Where the path starts\", \"An interior-point start\")")
-    ap.add_argument("--g", type=float, default=1e-9, help="the probe's opening (default 1e-9)")
+                         "\"Where the path starts\", \"An interior-point start\"); a cd "
+                         "campaign's own by default with --from-campaign")
+    ap.add_argument("--cd-max-pieces", type=int,
+                    help="a cd probe's budget of pieces, as unjam probe --cd-max-pieces (default "
+                         "none)")
+    ap.add_argument("--cd-compliant-start", type=float,
+                    help="the continuation's first compliance, as unjam probe --cd-compliant-start "
+                         "(default 0.1)")
+    ap.add_argument("--g", type=float, help="the probe's opening (default 1e-9)")
     ap.add_argument("--dt", type=float, help="the cd step's time step (default: the quasi-static "
                     "sqrt(g / 1e-5), as unjam probe --method cd)")
     ap.add_argument("--near", type=float, default=5.0,
@@ -102,7 +118,7 @@ def parse(argv):
         ap.error(f"{a.packing} is not a packing directory (no meta.json)")
     if a.limit is not None and (a.from_campaign is None or a.limit < 1):
         ap.error("--limit takes a positive count and goes with --from-campaign")
-    for name in ("g", "dt"):
+    for name in ("g", "dt", "cd_compliant_start"):
         v = getattr(a, name)
         if v is not None and not (0 < v < float("inf")):
             ap.error(f"--{name} must be a finite number > 0, got {v}")
@@ -110,8 +126,72 @@ def parse(argv):
         ap.error(f"--near must be a finite number > 0, got {a.near}")
     if a.threads < 0 or a.chunk < 1:
         ap.error("--threads must be >= 0 and --chunk >= 1")
+    if a.cd_max_pieces is not None and a.cd_max_pieces < 0:
+        ap.error(f"--cd-max-pieces must be >= 0 (0: none), got {a.cd_max_pieces}")
     a.out = a.out or a.packing.rstrip("/") + "-fields"
     return a
+
+
+# A cd campaign's settings record (probe_summary.json "settings", probe/probe_campaign) holds a
+# cd setting only where it applies and differs from what campaigns made before it was a setting
+# used; absent, it is that value (docs/probe.md, "Campaigns"). Key in the record -> the
+# unjam.CdSettings field and its value where the record leaves it out.
+CAMPAIGN_CD = {"cd_start": ("start", "static"), "cd_softer_starts": ("softer_starts", 0),
+               "cd_compliant_start": ("compliant_start", 0.1), "cd_max_pieces": ("max_pieces", 0),
+               "cd_interior_states_pieces": ("interior_states_pieces", 0.0),
+               "cd_interior_states_stall": ("interior_states_stall", 0),
+               "cd_interior_states_retries": ("interior_states_retries", 0),
+               "cd_interior_iterations": ("interior_iterations", 40),
+               "cd_interior_neighbourhood": ("interior_neighbourhood", 0.0),
+               "cd_settle_compliance": ("settle_compliance", 0.0)}
+# Recorded where set, absent at the tool's default (no older value).
+CAMPAIGN_CD_DEFAULTED = {"cd_accept_residual": "accept_residual"}
+# The options that a cd campaign's own settings replace.
+CAMPAIGN_OPTIONS = ("cd_start", "cd_max_pieces", "cd_compliant_start", "g", "dt")
+
+
+def campaign_settings(a):
+    """(g, dt, cd fields) of the cd campaign behind --from-campaign, or None where there is none
+    (--contacts, no probe_summary.json beside probes.csv, or a campaign by another method)."""
+    if a.from_campaign is None:
+        return None
+    summary = read_json(os.path.join(os.path.dirname(os.path.abspath(a.from_campaign)),
+                                     "probe_summary.json"))
+    rec = summary.get("settings") if isinstance(summary, dict) else None
+    if not isinstance(rec, dict) or rec.get("method") != "cd":
+        return None
+    given = [n for n in CAMPAIGN_OPTIONS if getattr(a, n) is not None]
+    if given:
+        sys.exit(f"field_cosines: {a.from_campaign} is a cd campaign, whose own settings probe its "
+                 f"contacts again; leave out --{', --'.join(n.replace('_', '-') for n in given)}")
+    cd = {field: rec.get(key, absent) for key, (field, absent) in CAMPAIGN_CD.items()}
+    cd.update({field: rec[key] for key, field in CAMPAIGN_CD_DEFAULTED.items() if key in rec})
+    unknown = sorted(k for k in rec if k.startswith("cd_") and k not in CAMPAIGN_CD
+                     and k not in CAMPAIGN_CD_DEFAULTED)
+    if unknown or "window_d" in rec:
+        sys.exit(f"field_cosines: {a.from_campaign}'s campaign has settings this script does not "
+                 f"take ({', '.join(unknown + (['window_d'] if 'window_d' in rec else []))})")
+    return rec["g"], rec["dt"], cd
+
+
+def campaign_f_crit(a):
+    """contact -> the campaign's F_crit, None where its probe has no solution (residual
+    1.8e308, as kNoSolution in probes.csv)."""
+    rows = unjam_plot.read_csv(a.from_campaign, ["contact", "f_crit", "residual"], min_rows=1)
+    return {int(k): (float(f) if float(r) < 1e300 else None)
+            for k, f, r in zip(rows["contact"], rows["f_crit"], rows["residual"])}
+
+
+def campaign_check(rows, reference):
+    """How many cd probes reproduce the campaign's: the same F_crit bit for bit, or no solution
+    by both; the contacts of the others and their largest relative difference in F_crit."""
+    both = [r for r in rows if int(r["contact"]) in reference]
+    mine = {int(r["contact"]): (float(r["f_crit_cd"]) if r["f_crit_cd"] != "" else None) for r in both}
+    differ = [k for k, f in mine.items() if f != reference[k]]
+    rel = [abs(mine[k] / reference[k] - 1.0) for k in differ
+           if mine[k] is not None and reference[k] not in (None, 0.0)]
+    return {"compared": len(both), "equal": len(both) - len(differ), "differ": differ,
+            "max_relative_difference": max(rel) if rel else 0.0}
 
 
 def listed_contacts(a):
@@ -209,10 +289,27 @@ def main(argv):
     unjam = import_unjam()
     p = unjam.read_packing(a.packing)
     ks = listed_contacts(a)
+    from_campaign = campaign_settings(a)
     os.makedirs(a.out, exist_ok=True)
     table = os.path.join(a.out, "fields.csv")
+    if from_campaign is not None:
+        a.g, a.dt, cd_fields = from_campaign
+        a.cd_start = cd_fields["start"]
+    else:
+        a.g = 1e-9 if a.g is None else a.g
+        a.cd_start = a.cd_start or "compliant"
+        cd_fields = {"start": a.cd_start}
+        if a.cd_max_pieces is not None:
+            cd_fields["max_pieces"] = a.cd_max_pieces
+        if a.cd_compliant_start is not None:
+            cd_fields["compliant_start"] = a.cd_compliant_start
+    # The settings a table resumes with; the start alone where it is the only cd setting, as in
+    # the tables made before the others were options.
     settings = {"packing": os.path.abspath(a.packing), "cd_start": a.cd_start, "g": a.g, "dt": a.dt,
                 "near": a.near}
+    if set(cd_fields) != {"start"}:
+        settings["cd"] = cd_fields
+    cd_settings = unjam.CdSettings(**cd_fields)  # range-checked as unjam probe checks its options
     os.makedirs(os.path.join(a.out, "fields"), exist_ok=True)
     rows = read_done(a, ks, settings)
     write_json(os.path.join(a.out, "settings.json"), settings)
@@ -226,7 +323,7 @@ def main(argv):
         for i in range(0, len(todo), a.chunk):
             chunk = todo[i:i + a.chunk]
             lp = unjam.probe(p, contacts=chunk, method="lp", **common)
-            cd = unjam.probe(p, contacts=chunk, method="cd", cd_start=a.cd_start, dt=a.dt, **common)
+            cd = unjam.probe(p, contacts=chunk, method="cd", cd=cd_settings, dt=a.dt, **common)
             for r_lp, r_cd in zip(lp, cd):
                 solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
                 near = near_grains(p, r_cd.contact, a.near)
@@ -260,7 +357,8 @@ def main(argv):
     ratio = [float(r["norm_ratio"]) for r in exact if r["norm_ratio"] != ""]
     summary = {
         "packing": os.path.abspath(a.packing), "N": p.N, "mu": p.mu, "seed": p.seed,
-        "cd_start": a.cd_start, "g": a.g, "dt": a.dt,
+        "cd_start": a.cd_start, "g": a.g, "dt": a.dt, "cd": cd_fields,
+        "settings_from_campaign": from_campaign is not None,
         "probes": len(rows), "exact": len(exact),
         "without_solution": sum(1 for r in rows if r["f_crit_cd"] == ""),
         "cosine": quantiles(cos), "cosine_near": quantiles(cos_near), "near_diameters": a.near,
@@ -271,6 +369,16 @@ def main(argv):
         "program_version": unjam.__version__,
         "command": " ".join([os.path.basename(sys.executable), *sys.argv]),
     }
+    if from_campaign is not None:
+        check = campaign_check(rows, campaign_f_crit(a))
+        summary["campaign_check"] = check
+        if check["differ"]:
+            print(f"field_cosines: warning: F_crit(cd) differs from the campaign's on "
+                  f"{len(check['differ'])} of {check['compared']} contacts (largest relative "
+                  f"difference {check['max_relative_difference']:.3g}; contacts "
+                  f"{check['differ'][:10]}{' ...' if len(check['differ']) > 10 else ''}): "
+                  "the campaign was made by another build or with settings it did not record",
+                  file=sys.stderr)
     write_json(os.path.join(a.out, "fields.json"), summary)
     q, qn = summary["cosine"], summary["cosine_near"]
     md = ["| probes | exact | cosine median (quartiles) | range | above 0.99 | below 0.5 | "
@@ -284,7 +392,8 @@ def main(argv):
     else:
         md.append(f"| {len(rows)} | {len(exact)} | – | – | – | – | – | – |")
     unjam_plot.write_file_atomic(os.path.join(a.out, "fields.md"), lambda f: f.write(
-        f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}), exact probes only; "
+        f"Fields of {a.packing}, lp against cd (--cd-start {a.cd_start}"
+        f"{', the settings of the campaign ' + a.from_campaign if from_campaign else ''}), exact probes only; "
         "norm ratio |u_cd| / |u_lp|\n\n" + "\n".join(md) + "\n"))
     plot(rows, os.path.join(a.out, "cosines.png"),
          f"{os.path.basename(a.packing.rstrip('/'))}: {len(exact)} exact probes of {len(rows)}")

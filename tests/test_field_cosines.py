@@ -144,6 +144,62 @@ def test_the_contacts_of_a_campaign(tmp_path):
     assert [r["contact"] for r in rows(tmp_path / "f")] == campaign[:3]
 
 
+def test_a_cd_campaigns_own_settings_probe_its_contacts_again(tmp_path):
+    # A cd campaign with settings away from the defaults: its contacts are probed again with
+    # them, and every F_crit is the campaign's, bit for bit.
+    p50 = str(REPO / "tests" / "fixtures" / "p50-mu1")
+    c = tmp_path / "c"
+    subprocess.run([UNJAM, "probe", p50, "--sample", "8", "--seed", "2", "--method", "cd",
+                    "--cd-start", "compliant", "--cd-compliant-start", "1e-3", "--cd-max-pieces", "5000",
+                    "--threads", "1", "--out", str(c), "--quiet"], check=True, capture_output=True)
+    run(p50, "--from-campaign", c / "probes.csv", "--threads", 1, "--out", tmp_path / "f")
+    s = json.loads((tmp_path / "f" / "fields.json").read_text())
+    assert s["settings_from_campaign"] and s["cd_start"] == "compliant" and s["dt"] == 0.01
+    assert s["cd"]["compliant_start"] == 1e-3 and s["cd"]["max_pieces"] == 5000
+    assert s["campaign_check"] == {"compared": 8, "equal": 8, "differ": [], "max_relative_difference": 0.0}
+    with open(c / "probes.csv", newline="") as f:
+        campaign = {r["contact"]: float(r["f_crit"]) for r in csv.DictReader(f)}
+    assert all(float(r["f_crit_cd"]) == campaign[r["contact"]] for r in rows(tmp_path / "f"))
+    # The check can fail: at the default first compliance (a record without it) the same
+    # probes end on other bits of F_crit, and the script says so.
+    summary = json.loads((c / "probe_summary.json").read_text())
+    del summary["settings"]["cd_compliant_start"]
+    (c / "probe_summary.json").write_text(json.dumps(summary))
+    r = run(p50, "--from-campaign", c / "probes.csv", "--threads", 1, "--out", tmp_path / "g")
+    s = json.loads((tmp_path / "g" / "fields.json").read_text())
+    assert s["cd"]["compliant_start"] == 0.1 and s["campaign_check"]["differ"]
+    assert 0 < s["campaign_check"]["max_relative_difference"] < 1e-6
+    assert "differs from the campaign's" in r.stderr
+    # Its options are the campaign's: given too, they are refused before anything is written.
+    r = run(p50, "--from-campaign", c / "probes.csv", "--cd-start", "static", "--g", 1e-8,
+            "--out", tmp_path / "h", ok=False)
+    assert r.returncode == 1 and "leave out --cd-start, --g" in r.stderr
+    assert not (tmp_path / "h").exists()
+    # A setting this script does not know is refused, not silently dropped.
+    summary["settings"]["cd_new_thing"] = 1
+    (c / "probe_summary.json").write_text(json.dumps(summary))
+    r = run(p50, "--from-campaign", c / "probes.csv", "--out", tmp_path / "h", ok=False)
+    assert r.returncode == 1 and "cd_new_thing" in r.stderr
+
+
+def test_the_cd_options_without_a_campaign(tmp_path):
+    # --contacts with --cd-max-pieces and --cd-compliant-start: the probes of unjam.probe with
+    # the same settings, recorded for the resume.
+    ks = [2, 6, 45]
+    run(P50, "--contacts", *ks, "--cd-max-pieces", 40, "--cd-compliant-start", 1e-3, "--threads", 1,
+        "--out", tmp_path)
+    p = unjam.read_packing(P50)
+    cd = unjam.probe(p, contacts=ks, method="cd", cd=unjam.CdSettings(start="compliant", max_pieces=40,
+                                                                       compliant_start=1e-3))
+    assert [r["f_crit_cd"] for r in rows(tmp_path)] == [repr(x.f_crit) if x.residual < 1e300 else "" for x in cd]
+    settings = json.loads((tmp_path / "settings.json").read_text())
+    assert settings["cd"] == {"start": "compliant", "max_pieces": 40, "compliant_start": 1e-3}
+    r = run(P50, "--contacts", *ks, "--threads", 1, "--out", tmp_path, ok=False)
+    assert r.returncode == 1 and "other settings" in r.stderr
+    r = run(P50, "--contacts", 0, "--cd-max-pieces", -1, ok=False)
+    assert r.returncode == 2 and "--cd-max-pieces must be >= 0" in r.stderr
+
+
 def test_bad_input_is_refused(tmp_path):
     r = run(tmp_path, "--contacts", 0, ok=False)
     assert r.returncode == 2 and "not a packing directory" in r.stderr
