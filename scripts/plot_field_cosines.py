@@ -60,18 +60,31 @@ def main(argv):
     positive = [p["mu"] for p in packs if p["mu"] > 0]
     mu0 = min(positive) / 3 if positive else 1e-3  # where mu = 0 is drawn
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(9.0, 3.6))
-    for i, p in enumerate(packs):
-        q = p["cos"]
-        if not q:
-            continue
-        x = (p["mu"] if p["mu"] > 0 else mu0) * (1.0 + 0.06 * (i % 3 - 1))  # seeds side by side
-        ax0.plot([x, x], [q["min"], q["max"]], color="0.6", lw=0.8)
-        ax0.plot([x, x], [q["q1"], q["q3"]], color="C0", lw=4, solid_capstyle="butt")
-        ax0.plot([x], [q["median"]], "o", color="k", ms=3)
-        if p["near"]:
-            ax0.plot([x * 1.04], [p["near"]["median"]], "s", color="C3", ms=3)
-        if p["ratio"]:
-            ax1.plot([x], [p["ratio"]["median"]], "o", color="C1", ms=4)
+    # One colour per N (red is the near field's); the packings of one mu side by side, in the
+    # order of N and seed.
+    sizes = sorted({p["N"] for p in packs})
+    palette = ["C0", "C2", "C4", "C1", "C5", "C6", "C8", "C9"]
+    colour = {n: palette[k % len(palette)] for k, n in enumerate(sizes)}
+    at_mu = {}
+    for p in packs:
+        at_mu.setdefault(p["mu"], []).append(p)
+    for group in at_mu.values():
+        for j, p in enumerate(group):
+            q = p["cos"]
+            if not q:
+                continue
+            x = (p["mu"] if p["mu"] > 0 else mu0) * (1.0 + 0.08 * (j - (len(group) - 1) / 2))
+            ax0.plot([x, x], [q["min"], q["max"]], color="0.6", lw=0.8)
+            ax0.plot([x, x], [q["q1"], q["q3"]], color=colour[p["N"]], lw=4, solid_capstyle="butt")
+            ax0.plot([x], [q["median"]], "o", color="k", ms=3)
+            if p["near"]:
+                ax0.plot([x * 1.03], [p["near"]["median"]], "s", color="C3", ms=3)
+            if p["ratio"]:
+                ax1.plot([x], [p["ratio"]["median"]], "o", color=colour[p["N"]], ms=4)
+    if len(sizes) > 1:
+        for n in sizes:
+            ax1.plot([], [], "o", color=colour[n], label=f"N = {n}")
+        ax1.legend(fontsize=8)
     for ax, label in ((ax0, "cosine of the fields, lp against cd"), (ax1, "median |u_cd| / |u_lp|")):
         ax.set_xscale("log")
         ax.set_xlabel(f"mu (mu = 0 drawn at {mu0:.2g})")
@@ -80,8 +93,8 @@ def main(argv):
     lowest = min((p["cos"]["min"] for p in packs if p["cos"]), default=0.0)
     ax0.set_ylim(min(0.0, lowest) - 0.05, 1.02)
     ax1.axhline(1.0, color="0.5", lw=0.8)
-    fig.suptitle("lp field against the paper's probe (cd), exact probes: median (black), quartiles, range; "
-                 "near field's median (red)", fontsize=9)
+    fig.suptitle("lp field against the paper's probe (cd), exact probes: median (black), quartiles "
+                 "(coloured by N), range; near field's median (red)", fontsize=9)
     fig.tight_layout()
     unjam_plot.save_figure(fig, a.out + ".png")
     plt.close(fig)
