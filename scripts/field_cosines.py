@@ -166,11 +166,11 @@ def campaign_settings(a):
                  f"contacts again; leave out --{', --'.join(n.replace('_', '-') for n in given)}")
     cd = {field: rec.get(key, absent) for key, (field, absent) in CAMPAIGN_CD.items()}
     cd.update({field: rec[key] for key, field in CAMPAIGN_CD_DEFAULTED.items() if key in rec})
-    unknown = sorted(k for k in rec if k.startswith("cd_") and k not in CAMPAIGN_CD
-                     and k not in CAMPAIGN_CD_DEFAULTED)
-    if unknown or "window_d" in rec:
+    unknown = sorted(k for k in rec if k == "window_d" or (
+        k.startswith("cd_") and k not in CAMPAIGN_CD and k not in CAMPAIGN_CD_DEFAULTED))
+    if unknown:
         sys.exit(f"field_cosines: {a.from_campaign}'s campaign has settings this script does not "
-                 f"take ({', '.join(unknown + (['window_d'] if 'window_d' in rec else []))})")
+                 f"take ({', '.join(unknown)})")
     return rec["g"], rec["dt"], cd
 
 
