@@ -40,11 +40,12 @@ Outputs, in DIR (default PACKING-fields):
 --from-campaign takes the contacts of a campaign's probes.csv in its order (e.g. the
 `--sample 300 --seed 1` campaign whose F_crit the docs tabulate), --limit the first M of them.
 Where that is a cd campaign (its probe_summary.json beside probes.csv says method cd), its own
-g, dt and cd settings (start, budget of pieces, first compliance, the interior start's
-settings, as the campaign recorded them) probe the contacts again, so the cd probes are the
-campaign's: fields.json's `campaign_check` counts the contacts whose F_crit(cd) equals the
-campaign's bit for bit (a warning names the others: a campaign made by another build, or
-settings it did not record). The options --cd-start, --cd-max-pieces, --cd-compliant-start,
+g, dt, window and cd settings (start, budget of pieces, first compliance, the interior start's
+settings), read back by unjam.campaign_settings from what the campaign recorded, probe the
+contacts again, so the cd probes are the campaign's: fields.json's `campaign_check` counts the
+contacts whose F_crit(cd) equals the campaign's bit for bit (a warning names the others: a
+campaign made by another build, or settings it did not record). A record the tool would not
+have written on this packing (an unknown setting, another packing's contact model) is refused. The options --cd-start, --cd-max-pieces, --cd-compliant-start,
 --g and --dt are refused with such a campaign; with --contacts, or an lp campaign, they apply
 (defaults: compliant start, no budget, first compliance 0.1, g = 1e-9, the quasi-static dt).
 Exit codes: 0 done, 1 bad input or a failed probe (its message is printed), 3 interrupted
@@ -132,46 +133,31 @@ def parse(argv):
     return a
 
 
-# A cd campaign's settings record (probe_summary.json "settings", probe/probe_campaign) holds a
-# cd setting only where it applies and differs from what campaigns made before it was a setting
-# used; absent, it is that value (docs/probe.md, "Campaigns"). Key in the record -> the
-# unjam.CdSettings field and its value where the record leaves it out.
-CAMPAIGN_CD = {"cd_start": ("start", "static"), "cd_softer_starts": ("softer_starts", 0),
-               "cd_compliant_start": ("compliant_start", 0.1), "cd_max_pieces": ("max_pieces", 0),
-               "cd_interior_states_pieces": ("interior_states_pieces", 0.0),
-               "cd_interior_states_stall": ("interior_states_stall", 0),
-               "cd_interior_states_retries": ("interior_states_retries", 0),
-               "cd_interior_iterations": ("interior_iterations", 40),
-               "cd_interior_neighbourhood": ("interior_neighbourhood", 0.0),
-               "cd_settle_compliance": ("settle_compliance", 0.0)}
-# Recorded where set, absent at the tool's default (no older value).
-CAMPAIGN_CD_DEFAULTED = {"cd_accept_residual": "accept_residual"}
 # The options that a cd campaign's own settings replace.
 CAMPAIGN_OPTIONS = ("cd_start", "cd_max_pieces", "cd_compliant_start", "g", "dt")
 
 
-def campaign_settings(a):
-    """(g, dt, cd fields) of the cd campaign behind --from-campaign, or None where there is none
-    (--contacts, no probe_summary.json beside probes.csv, or a campaign by another method)."""
+def campaign_settings(a, unjam, p):
+    """The settings (unjam.campaign_settings: g, dt, cd, window, ...) of the cd campaign behind
+    --from-campaign, read back from its probe_summary.json as the tool recorded them, or None
+    where there is none (--contacts, no probe_summary.json beside probes.csv, or a campaign by
+    another method)."""
     if a.from_campaign is None:
         return None
-    summary = read_json(os.path.join(os.path.dirname(os.path.abspath(a.from_campaign)),
-                                     "probe_summary.json"))
-    rec = summary.get("settings") if isinstance(summary, dict) else None
-    if not isinstance(rec, dict) or rec.get("method") != "cd":
+    path = os.path.join(os.path.dirname(os.path.abspath(a.from_campaign)), "probe_summary.json")
+    if not os.path.isfile(path):
+        return None
+    try:
+        rec = unjam.campaign_settings(p, path)
+    except unjam.Error as e:
+        sys.exit(f"field_cosines: the campaign of {a.from_campaign}: {e}")
+    if rec["method"] != "cd":
         return None
     given = [n for n in CAMPAIGN_OPTIONS if getattr(a, n) is not None]
     if given:
         sys.exit(f"field_cosines: {a.from_campaign} is a cd campaign, whose own settings probe its "
                  f"contacts again; leave out --{', --'.join(n.replace('_', '-') for n in given)}")
-    cd = {field: rec.get(key, absent) for key, (field, absent) in CAMPAIGN_CD.items()}
-    cd.update({field: rec[key] for key, field in CAMPAIGN_CD_DEFAULTED.items() if key in rec})
-    unknown = sorted(k for k in rec if k == "window_d" or (
-        k.startswith("cd_") and k not in CAMPAIGN_CD and k not in CAMPAIGN_CD_DEFAULTED))
-    if unknown:
-        sys.exit(f"field_cosines: {a.from_campaign}'s campaign has settings this script does not "
-                 f"take ({', '.join(unknown)})")
-    return rec["g"], rec["dt"], cd
+    return rec
 
 
 def campaign_f_crit(a):
@@ -289,11 +275,13 @@ def main(argv):
     unjam = import_unjam()
     p = unjam.read_packing(a.packing)
     ks = listed_contacts(a)
-    from_campaign = campaign_settings(a)
+    from_campaign = campaign_settings(a, unjam, p)
     os.makedirs(a.out, exist_ok=True)
     table = os.path.join(a.out, "fields.csv")
+    window = None  # the cd probes' window (mean diameters; None: the whole packing)
     if from_campaign is not None:
-        a.g, a.dt, cd_fields = from_campaign
+        a.g, a.dt, window = from_campaign["g"], from_campaign["dt"], from_campaign["window"]
+        cd_fields = from_campaign["cd"].__getstate__()  # every unjam.CdSettings field, by name
         a.cd_start = cd_fields["start"]
     else:
         a.g = 1e-9 if a.g is None else a.g
@@ -309,6 +297,8 @@ def main(argv):
                 "near": a.near}
     if set(cd_fields) != {"start"}:
         settings["cd"] = cd_fields
+    if window is not None:
+        settings["window"] = window
     cd_settings = unjam.CdSettings(**cd_fields)  # range-checked as unjam probe checks its options
     os.makedirs(os.path.join(a.out, "fields"), exist_ok=True)
     rows = read_done(a, ks, settings)
@@ -323,7 +313,8 @@ def main(argv):
         for i in range(0, len(todo), a.chunk):
             chunk = todo[i:i + a.chunk]
             lp = unjam.probe(p, contacts=chunk, method="lp", **common)
-            cd = unjam.probe(p, contacts=chunk, method="cd", cd=cd_settings, dt=a.dt, **common)
+            cd = unjam.probe(p, contacts=chunk, method="cd", cd=cd_settings, dt=a.dt, window=window,
+                              **common)
             for r_lp, r_cd in zip(lp, cd):
                 solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
                 near = near_grains(p, r_cd.contact, a.near)
@@ -357,7 +348,7 @@ def main(argv):
     ratio = [float(r["norm_ratio"]) for r in exact if r["norm_ratio"] != ""]
     summary = {
         "packing": os.path.abspath(a.packing), "N": p.N, "mu": p.mu, "seed": p.seed,
-        "cd_start": a.cd_start, "g": a.g, "dt": a.dt, "cd": cd_fields,
+        "cd_start": a.cd_start, "g": a.g, "dt": a.dt, "cd": cd_fields, "window": window,
         "settings_from_campaign": from_campaign is not None,
         "probes": len(rows), "exact": len(exact),
         "without_solution": sum(1 for r in rows if r["f_crit_cd"] == ""),

@@ -175,11 +175,32 @@ def test_a_cd_campaigns_own_settings_probe_its_contacts_again(tmp_path):
             "--out", tmp_path / "h", ok=False)
     assert r.returncode == 1 and "leave out --cd-start, --g" in r.stderr
     assert not (tmp_path / "h").exists()
-    # A setting this script does not know is refused, not silently dropped.
+    # A setting unjam does not know is refused, not silently dropped; so is the record of a
+    # campaign on another packing (its contact model).
     summary["settings"]["cd_new_thing"] = 1
     (c / "probe_summary.json").write_text(json.dumps(summary))
     r = run(p50, "--from-campaign", c / "probes.csv", "--out", tmp_path / "h", ok=False)
     assert r.returncode == 1 and "cd_new_thing" in r.stderr
+    del summary["settings"]["cd_new_thing"]
+    summary["settings"]["touch_gap"] *= 2
+    (c / "probe_summary.json").write_text(json.dumps(summary))
+    r = run(p50, "--from-campaign", c / "probes.csv", "--out", tmp_path / "h", ok=False)
+    assert r.returncode == 1 and "touch_gap" in r.stderr
+    assert not (tmp_path / "h").exists()
+
+
+def test_a_windowed_interior_campaign_is_probed_again_as_it_was(tmp_path):
+    # The interior start in a window of 3 mean diameters: the window and the interior start's
+    # settings come back from the record, and every F_crit is the campaign's, bit for bit.
+    c = tmp_path / "c"
+    subprocess.run([UNJAM, "probe", P50, "--sample", "4", "--seed", "3", "--method", "cd",
+                    "--cd-start", "interior", "--window", "3", "--cd-interior-iterations", "60",
+                    "--threads", "1", "--out", str(c), "--quiet"], check=True, capture_output=True)
+    run(P50, "--from-campaign", c / "probes.csv", "--threads", 1, "--out", tmp_path / "f")
+    s = json.loads((tmp_path / "f" / "fields.json").read_text())
+    assert s["window"] == 3.0 and s["cd_start"] == "interior" and s["cd"]["interior_iterations"] == 60
+    assert s["campaign_check"] == {"compared": 4, "equal": 4, "differ": [], "max_relative_difference": 0.0}
+    assert json.loads((tmp_path / "f" / "settings.json").read_text())["window"] == 3.0
 
 
 def test_the_cd_options_without_a_campaign(tmp_path):

@@ -449,6 +449,165 @@ TEST(ProbeCampaign, RecordedIntegerSettingsThatAreHugeFloatsAreRefused) {
   EXPECT_NO_THROW((void)campaign_settings_for(p));
 }
 
+// Every field campaign_settings_from_json reads back, equal in a and b.
+void expect_same_settings(const CampaignSettings& a, const CampaignSettings& b) {
+  EXPECT_EQ(a.method, b.method);
+  EXPECT_EQ(a.nlgs.g, b.nlgs.g);
+  EXPECT_EQ(a.kinematic.g, b.kinematic.g);
+  EXPECT_EQ(a.nlgs.dt, b.nlgs.dt);
+  EXPECT_EQ(a.nlgs.velocity_tol, b.nlgs.velocity_tol);
+  EXPECT_EQ(a.nlgs.max_sweeps, b.nlgs.max_sweeps);
+  EXPECT_EQ(a.nlgs.window, b.nlgs.window);
+  EXPECT_EQ(a.kinematic.state_tol, b.kinematic.state_tol);
+  EXPECT_EQ(a.total_displacement, b.total_displacement);
+  EXPECT_EQ(a.force_threshold, b.force_threshold);
+  EXPECT_EQ(a.max_inertia, b.max_inertia);
+  EXPECT_EQ(a.sample, b.sample);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.cd.start, b.cd.start);
+  EXPECT_EQ(a.cd.compliant_start, b.cd.compliant_start);
+  EXPECT_EQ(a.cd.softer_starts, b.cd.softer_starts);
+  EXPECT_EQ(a.cd.max_probe_pieces, b.cd.max_probe_pieces);
+  EXPECT_EQ(a.cd.accept_residual, b.cd.accept_residual);
+  EXPECT_EQ(a.cd.settle_compliance, b.cd.settle_compliance);
+  EXPECT_EQ(a.cd.interior_states_pieces, b.cd.interior_states_pieces);
+  EXPECT_EQ(a.cd.interior_states_stall, b.cd.interior_states_stall);
+  EXPECT_EQ(a.cd.interior_states_retries, b.cd.interior_states_retries);
+  EXPECT_EQ(a.cd.interior_max_iterations, b.cd.interior_max_iterations);
+  EXPECT_EQ(a.cd.interior_neighbourhood, b.cd.interior_neighbourhood);
+}
+
+TEST(ProbeCampaign, SettingsComeBackFromTheirRecord) {
+  // The record (to_json) of every method and cd start, with its settings at their defaults, at
+  // the values it leaves out and at others: campaign_settings_from_json gives the same settings,
+  // through the file's text as well.
+  const Packing& p = fixture_p50();
+  std::vector<std::pair<std::string, CampaignSettings>> cases;
+  const auto add = [&](const std::string& what, const std::function<void(CampaignSettings&)>& set) {
+    CampaignSettings s = campaign_settings_for(p);
+    set(s);
+    validate(s);
+    cases.emplace_back(what, s);
+  };
+  add("lp", [](CampaignSettings&) {});
+  add("lp sampled, total", [](CampaignSettings& s) {
+    s.sample = 20;
+    s.seed = 7;
+    s.total_displacement = true;
+    s.force_threshold = 1e-6;
+    s.kinematic.state_tol = 1e-8;
+    s.nlgs.g = s.kinematic.g = 1e-8;
+  });
+  add("nlgs", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kNlgs;
+    s.nlgs.velocity_tol = 1e-7;
+    s.nlgs.max_sweeps = 12345;
+    s.max_inertia = 0.01;
+  });
+  add("lemke windowed", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kLemke;
+    s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
+    s.nlgs.window = 3.0;
+  });
+  add("cd static", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
+  });
+  add("cd static, budget, settling", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.nlgs.dt = 0.05;
+    s.cd.max_probe_pieces = 3000;
+    s.cd.accept_residual = 1e-4;
+    s.cd.settle_compliance = 1e-6;
+  });
+  add("cd compliant", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::compliant;
+  });
+  add("cd compliant, single start at 1e-3", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::compliant;
+    s.cd.softer_starts = 0;
+    s.cd.compliant_start = 1e-3;
+  });
+  add("cd lp start", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::lp_optimum;
+  });
+  add("cd interior", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::interior_point;
+    s.cd.max_probe_pieces = 30000;
+  });
+  add("cd interior as the older campaigns", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::interior_point;
+    s.cd.softer_starts = 0;
+    s.cd.interior_states_pieces = 0.0;
+    s.cd.interior_states_stall = 0;
+    s.cd.interior_states_retries = 0;
+    s.cd.interior_max_iterations = 40;
+  });
+  add("cd interior, wide neighbourhood, windowed", [](CampaignSettings& s) {
+    s.method = ProbeMethod::kCd;
+    s.cd.start = CdPathStart::interior_point;
+    s.cd.interior_states_stall = 0;
+    s.cd.interior_states_retries = 0;
+    s.cd.interior_neighbourhood = 1e-3;
+    s.cd.compliant_start = 1e-4;
+    s.nlgs.window = 4.0;
+    s.max_inertia = 0.02;
+  });
+  for (const auto& [what, s] : cases) {
+    SCOPED_TRACE(what);
+    const nlohmann::json j = to_json(s);
+    const CampaignSettings back = campaign_settings_from_json(j, p);
+    expect_same_settings(back, s);
+    EXPECT_EQ(to_json(back), j);
+    expect_same_settings(campaign_settings_from_json(nlohmann::json::parse(j.dump()), p), s);
+  }
+}
+
+TEST(ProbeCampaign, SettingsRecordsThatUnjamWouldNotWriteAreRefused) {
+  const Packing& p = fixture_p50();
+  CampaignSettings cd = campaign_settings_for(p);
+  cd.method = ProbeMethod::kCd;
+  cd.nlgs.dt = default_probe_dt(cd.method, cd.nlgs.g);
+  const nlohmann::json good = to_json(cd);
+  const auto refused = [&](const std::string& what, const std::function<void(nlohmann::json&)>& change,
+                           const std::string& says) {
+    SCOPED_TRACE(what);
+    nlohmann::json j = good;
+    change(j);
+    try {
+      (void)campaign_settings_from_json(j, p, "the record");
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("the record", 0), 0u) << e.what();
+    }
+  };
+  refused("unknown key", [](nlohmann::json& j) { j["cd_future"] = 1; }, "'cd_future'");
+  refused("not an object", [](nlohmann::json& j) { j = nlohmann::json::array(); }, "not a JSON object");
+  refused("another packing's model", [](nlohmann::json& j) { j["touch_gap"] = 2.0 * j["touch_gap"].get<double>(); },
+          "touch_gap");
+  refused("a default written out", [](nlohmann::json& j) { j["cd_softer_starts"] = 2; }, "cd_softer_starts");
+  refused("a setting of another start", [](nlohmann::json& j) { j["cd_interior_neighbourhood"] = 1e-3; },
+          "cd_interior_neighbourhood");
+  refused("wrong type", [](nlohmann::json& j) { j["g"] = "small"; }, "the record:");
+  refused("out of range", [](nlohmann::json& j) { j["cd_max_pieces"] = -1; }, "--cd-max-pieces must be >= 0");
+  refused("no time step", [](nlohmann::json& j) { j.erase("dt"); }, "dt");
+  refused("unknown method", [](nlohmann::json& j) { j["method"] = "dem"; }, "--method must be");
+  refused("unknown start", [](nlohmann::json& j) { j["cd_start"] = "middle"; }, "--cd-start must be");
+  refused("unknown displacement", [](nlohmann::json& j) { j["displacement"] = "affine"; }, "displacement must be");
+  refused("a cd setting on nlgs", [](nlohmann::json& j) {
+    j["method"] = "nlgs";
+    j["velocity_tol"] = 1e-6;
+    j["max_sweeps"] = 1000;
+    j["cd_start"] = "interior";
+  }, "cd_start");
+}
+
 TEST(ProbeCampaign, SummaryRatioOfMeans) {
   const Packing& p = fixture_p50();
   CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));

@@ -329,6 +329,48 @@ def test_the_exact_probe_accepts_a_near_exact_solution_as_the_tool(tmp_path):
         unjam.probe(p, contact=8, method="cd", cd_start="compliant", cd_accept_residual=1e-2)
 
 
+def test_a_campaigns_settings_are_read_back_from_its_record(tmp_path, p50):
+    # unjam.campaign_settings: the settings `unjam probe --sample` recorded, under unjam.probe's
+    # argument names; probing a campaign's contact with them gives its row, bit for bit.
+    out = tmp_path / "c"
+    tool("probe", FIXTURE, "--sample", 3, "--seed", 5, "--method", "cd", "--cd-start", "interior",
+         "--cd-max-pieces", 4000, "--cd-interior-neighbourhood", 1e-3, "--window", 4, "--max-inertia", 0.5,
+         "--threads", 1, "--out", out, "--quiet")
+    d = unjam.campaign_settings(p50, out / "probe_summary.json")
+    assert {k: d[k] for k in ("method", "g", "dt", "window", "max_inertia", "sample", "seed", "displacement")} == \
+        {"method": "cd", "g": 1e-9, "dt": 0.01, "window": 4.0, "max_inertia": 0.5, "sample": 3, "seed": 5,
+         "displacement": "peculiar"}
+    assert d["cd"] == unjam.CdSettings(start="interior", max_pieces=4000, interior_neighbourhood=1e-3)
+    row = read_csv(out / "probes.csv")[0]
+    r = unjam.probe(p50, contact=int(row["contact"]), method=d["method"], g=d["g"], dt=d["dt"], cd=d["cd"],
+                    window=d["window"])
+    assert r.f_crit == float(row["f_crit"]) and r.sweeps == int(row["sweeps"])
+    lp = tmp_path / "lp"
+    tool("probe", FIXTURE, "--sample", 2, "--threads", 1, "--out", lp, "--quiet")
+    d = unjam.campaign_settings(p50, lp / "probe_summary.json")
+    assert (d["method"], d["dt"], d["window"], d["cd"]) == ("lp", None, None, unjam.CdSettings())
+    # Refused: a record the tool would not have written on this packing (another contact
+    # model, a value of the wrong type), a file without one.
+    record = json.loads((out / "probe_summary.json").read_text())
+    record["settings"]["M_lambda"] *= 2
+    (tmp_path / "model.json").write_text(json.dumps(record))
+    with pytest.raises(unjam.Error, match="not what unjam probe records on this packing .M_lambda"):
+        unjam.campaign_settings(p50, tmp_path / "model.json")
+    record = json.loads((out / "probe_summary.json").read_text())
+    record["settings"]["cd_softer_starts"] = "two"
+    (tmp_path / "bad.json").write_text(json.dumps(record))
+    with pytest.raises(unjam.Error, match="bad.json"):
+        unjam.campaign_settings(p50, tmp_path / "bad.json")
+    (tmp_path / "none.json").write_text("{}")
+    with pytest.raises(unjam.Error, match="holds no campaign settings"):
+        unjam.campaign_settings(p50, tmp_path / "none.json")
+    (tmp_path / "text.json").write_text("not json")
+    with pytest.raises(unjam.Error, match="is not JSON"):
+        unjam.campaign_settings(p50, tmp_path / "text.json")
+    with pytest.raises(unjam.Error):
+        unjam.campaign_settings(p50, tmp_path / "missing.json")
+
+
 def test_the_cd_settings_are_one_typed_object():
     # unjam.CdSettings: the cd method's settings as `unjam probe --cd-*` sets them, the tool's
     # defaults, every assignment range-checked (a refused one leaves the object as it was), and

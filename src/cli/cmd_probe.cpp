@@ -586,12 +586,13 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   ProbeOptions o;
   o.dir = dir;
   const nlohmann::json& first = shards.front();
-  // The method, g and --max-inertia as the shards' campaign settings record them (to_json of
-  // CampaignSettings, probe/probe_campaign; max_inertia_F0 is there only where it was set).
-  const nlohmann::json& settings = first.at("settings");
-  o.method = settings.at("method").get<std::string>();
-  o.g = settings.at("g").get<double>();
-  o.max_inertia = settings.value("max_inertia_F0", 0.0);
+  // The method, g and --max-inertia of the settings the shards' campaign records (read back by
+  // campaign_settings_from_json, which refuses a record it would not have written on p).
+  const CampaignSettings s =
+      campaign_settings_from_json(first.at("settings"), p, "the settings of the shards in " + out.string());
+  o.method = method_name(s.method);
+  o.g = s.nlgs.g;
+  o.max_inertia = s.max_inertia;
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
   CampaignState state = empty_campaign_state(p);
   RunTime time;

@@ -177,6 +177,36 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   return py::cast(std::move(results));
 }
 
+// The settings of the campaign whose probe_summary.json or probe_checkpoint.json is `path`, run
+// on p (campaign_settings_from_json), under the names of unjam.probe's arguments.
+py::dict campaign_settings(const Packing& p, const std::filesystem::path& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path.string() + " is not JSON (" + e.what() + ")");
+  }
+  if (!j.is_object() || !j.contains("settings"))
+    throw Error(path.string() + " holds no campaign settings (give the probe_summary.json or "
+                "probe_checkpoint.json of `unjam probe --all` or `--sample K`)");
+  const CampaignSettings s = campaign_settings_from_json(j.at("settings"), p, "the settings in " + path.string());
+  const bool lp = s.method == ProbeMethod::kLp;
+  py::dict d;
+  d["method"] = std::string(method_name(s.method));
+  d["g"] = s.nlgs.g;
+  d["dt"] = lp ? py::none() : py::cast(s.nlgs.dt);
+  d["cd"] = py::cast(s.cd);
+  d["window"] = s.nlgs.window > 0.0 ? py::cast(s.nlgs.window) : py::none();
+  d["velocity_tol"] = s.nlgs.velocity_tol;
+  d["max_sweeps"] = s.nlgs.max_sweeps;
+  d["max_inertia"] = s.max_inertia;
+  d["displacement"] = std::string(s.total_displacement ? "total" : "peculiar");
+  d["force_threshold"] = s.force_threshold;
+  d["sample"] = s.sample;
+  d["seed"] = s.seed;
+  return d;
+}
+
 py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method) {
   if (method != "barrier" && method != "simplex") throw Error("method must be barrier or simplex");
   ForceBoundsOptions lp;
@@ -356,6 +386,14 @@ void bind_compute(py::module_& m) {
         "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\"); cd: all of the cd method's "
         "settings as one unjam.CdSettings (its start included), instead of the cd_* keywords, which must then "
         "be left at their defaults");
+  m.def("campaign_settings", &campaign_settings, py::arg("packing"), py::arg("path"),
+        "the settings of a campaign of `unjam probe --all` or `--sample K` on this packing, read from its "
+        "probe_summary.json or probe_checkpoint.json (path): a dict with method, g, dt (None for lp), cd "
+        "(an unjam.CdSettings, the tool's defaults where the method is not cd), window (None: the whole "
+        "packing), velocity_tol, max_sweeps, max_inertia (F0), displacement, force_threshold (F0), sample "
+        "and seed; unjam.probe(packing, contact=K, method=d['method'], g=d['g'], dt=d['dt'], cd=d['cd'], "
+        "window=d['window']) probes contact K as the campaign did. Raises unjam.Error for a record the "
+        "tool would not have written on this packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");

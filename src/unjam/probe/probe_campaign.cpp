@@ -11,6 +11,8 @@
 #include <numeric>
 #include <optional>
 #include <random>
+#include <set>
+#include <string>
 
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/atomic_file.hpp"
@@ -509,6 +511,85 @@ nlohmann::json to_json(const CampaignSettings& s) {
     }
   }
   return j;
+}
+
+CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Packing& p, const std::string& name) {
+  if (!j.is_object()) throw Error(name + " are not a JSON object");
+  static const std::set<std::string> kKnown = {
+      "method", "g", "touch_gap", "displacement", "force_threshold_F0", "sample", "seed", "state_tol_F0",
+      "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
+      "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
+      "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
+      "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
+  for (const auto& [key, value] : j.items())
+    if (kKnown.count(key) == 0) throw Error(name + " have a setting this unjam does not know: '" + key + "'");
+  CampaignSettings s = campaign_settings_for(p);
+  try {
+    s.method = method_from_name(j.at("method").get<std::string>());
+    s.nlgs.g = s.kinematic.g = j.at("g").get<double>();
+    const std::string displacement = j.at("displacement").get<std::string>();
+    if (displacement != "total" && displacement != "peculiar")
+      throw Error("displacement must be total or peculiar (got '" + displacement + "')");
+    s.total_displacement = displacement == "total";
+    s.force_threshold = j.at("force_threshold_F0").get<double>();
+    s.sample = json_integer<int>(j.at("sample"), "sample");
+    s.seed = json_integer<std::uint64_t>(j.at("seed"), "seed");
+    if (s.method == ProbeMethod::kLp) {
+      s.kinematic.state_tol = j.at("state_tol_F0").get<double>();
+      s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
+    } else {
+      s.nlgs.dt = j.at("dt").get<double>();
+      // Each absent cd setting at the value to_json leaves out.
+      const auto number = [&j](const char* key, double absent) {
+        return j.contains(key) ? j.at(key).get<double>() : absent;
+      };
+      const auto integer = [&j](const char* key, long long absent) {
+        return j.contains(key) ? json_integer<long long>(j.at(key), key) : absent;
+      };
+      if (s.method == ProbeMethod::kCd) {
+        s.cd.start = cd_start_from_name(j.value("cd_start", std::string(cd_start_name(CdPathStart::static_network))));
+        s.cd.max_probe_pieces = integer("cd_max_pieces", 0);
+        s.cd.accept_residual = number("cd_accept_residual", CdPathSettings{}.accept_residual);
+        s.cd.settle_compliance = number("cd_settle_compliance", 0.0);
+      }
+      if (has_continuation(s)) {
+        s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));
+        s.cd.compliant_start = number("cd_compliant_start", kUnrecordedCompliantStart);
+      }
+      if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
+        s.cd.interior_states_pieces = number("cd_interior_states_pieces", 0.0);
+        s.cd.interior_states_stall = static_cast<int>(integer("cd_interior_states_stall", 0));
+        s.cd.interior_states_retries = static_cast<int>(integer("cd_interior_states_retries", 0));
+        s.cd.interior_max_iterations = static_cast<int>(integer("cd_interior_iterations", kUnrecordedInteriorIterations));
+        s.cd.interior_neighbourhood = number("cd_interior_neighbourhood", 0.0);
+      }
+      s.max_inertia = number("max_inertia_F0", 0.0);
+      s.nlgs.window = number("window_d", 0.0);
+      if (s.method == ProbeMethod::kNlgs) {
+        s.nlgs.velocity_tol = j.at("velocity_tol").get<double>();
+        s.nlgs.max_sweeps = json_integer<long long>(j.at("max_sweeps"), "max_sweeps");
+      }
+    }
+    validate(s);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(name + ": " + e.what());
+  } catch (const Error& e) {
+    throw Error(name + ": " + e.what());
+  }
+  // What the record holds and the settings do not give back: a key of another method or start,
+  // a default written out, another packing's contact model.
+  const nlohmann::json again = to_json(s);
+  if (again != j) {
+    std::string diff;
+    for (const auto& [key, value] : j.items())
+      if (!again.contains(key) || again.at(key) != value)
+        diff += (diff.empty() ? "" : ", ") + key + ": " + value.dump() + " recorded, " +
+                (again.contains(key) ? again.at(key).dump() : std::string("none")) + " read back";
+    for (const auto& [key, value] : again.items())
+      if (!j.contains(key)) diff += (diff.empty() ? "" : ", ") + key + ": none recorded, " + value.dump() + " read back";
+    throw Error(name + " are not what unjam probe records on this packing (" + diff + ")");
+  }
+  return s;
 }
 
 nlohmann::json to_json(const CampaignState& state) {

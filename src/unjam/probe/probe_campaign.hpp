@@ -224,6 +224,18 @@ CampaignSummary summarize(const Packing& packing, const CampaignState& state,
 nlohmann::json to_json(const CampaignSettings& settings);
 nlohmann::json to_json(const CampaignState& state);
 
+// The settings a campaign on `packing` was run with, read back from their record (to_json above:
+// the "settings" of probe_summary.json and of probe_checkpoint.json): its inverse. What the
+// record leaves out is what to_json leaves out: the contact model and the tolerances the record
+// does not name come from campaign_settings_for(packing), a cd setting absent from the record
+// takes the value at which to_json omits it (e.g. cd_softer_starts 0, cd_compliant_start 0.1,
+// cd_interior_iterations 40), a setting that does not apply to the method or start keeps its
+// default. Throws unjam::Error naming `name` for a key to_json does not write, a value of the
+// wrong type or out of range (validate), or a record that to_json of the result does not
+// reproduce exactly (e.g. the touch_gap or M_lambda of another packing's contact model).
+CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Packing& packing,
+                                             const std::string& name = "the campaign's settings");
+
 // A state saved from `packing` (to_json): throws unjam::Error unless it is one run_campaign
 // could have made on it: the averages on the packing's grid
 // (ResponseGrid::for_cell(cell, 2 <R>)), rows in strictly increasing contact order with the
