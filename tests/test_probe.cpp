@@ -509,48 +509,37 @@ TEST(ProbeCampaign, SettingsComeBackFromTheirRecord) {
     s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
     s.nlgs.window = 3.0;
   });
-  add("cd static", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
-  });
-  add("cd static, budget, settling", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
+  // The cd method from `start` at its quasi-static dt, then `set`.
+  const auto add_cd = [&](const std::string& what, CdPathStart start, const std::function<void(CampaignSettings&)>& set) {
+    add(what, [&](CampaignSettings& s) {
+      s.method = ProbeMethod::kCd;
+      s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
+      s.cd.start = start;
+      set(s);
+    });
+  };
+  add_cd("cd static", CdPathStart::static_network, [](CampaignSettings&) {});
+  add_cd("cd static, budget, settling, dt", CdPathStart::static_network, [](CampaignSettings& s) {
     s.nlgs.dt = 0.05;
     s.cd.max_probe_pieces = 3000;
     s.cd.accept_residual = 1e-4;
     s.cd.settle_compliance = 1e-6;
   });
-  add("cd compliant", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::compliant;
-  });
-  add("cd compliant, single start at 1e-3", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::compliant;
+  add_cd("cd compliant", CdPathStart::compliant, [](CampaignSettings&) {});
+  add_cd("cd compliant, single start at 1e-3", CdPathStart::compliant, [](CampaignSettings& s) {
     s.cd.softer_starts = 0;
     s.cd.compliant_start = 1e-3;
   });
-  add("cd lp start", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::lp_optimum;
-  });
-  add("cd interior", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::interior_point;
-    s.cd.max_probe_pieces = 30000;
-  });
-  add("cd interior as the older campaigns", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::interior_point;
+  add_cd("cd lp start", CdPathStart::lp_optimum, [](CampaignSettings&) {});
+  add_cd("cd interior", CdPathStart::interior_point, [](CampaignSettings& s) { s.cd.max_probe_pieces = 30000; });
+  add_cd("cd interior as the older campaigns", CdPathStart::interior_point, [](CampaignSettings& s) {
     s.cd.softer_starts = 0;
     s.cd.interior_states_pieces = 0.0;
     s.cd.interior_states_stall = 0;
     s.cd.interior_states_retries = 0;
     s.cd.interior_max_iterations = 40;
   });
-  add("cd interior, wide neighbourhood, windowed", [](CampaignSettings& s) {
-    s.method = ProbeMethod::kCd;
-    s.cd.start = CdPathStart::interior_point;
+  add_cd("cd interior, wide neighbourhood, windowed", CdPathStart::interior_point, [](CampaignSettings& s) {
     s.cd.interior_states_stall = 0;
     s.cd.interior_states_retries = 0;
     s.cd.interior_neighbourhood = 1e-3;
