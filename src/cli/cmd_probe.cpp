@@ -312,7 +312,7 @@ struct RunTime {
   CampaignTime all_runs;
 };
 
-void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
+void finish_campaign(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
                      const CampaignState& state, const RunTime& time, const fs::path& out, int planned = 0);
 void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nlohmann::json& settings_json,
                  const CampaignState& state, const RunTime& time, const fs::path& file);
@@ -359,8 +359,8 @@ std::function<void(int, int, double, double)> progress_printer(const ProbeOption
 // running, or stopped), written to DIR as a finished campaign writes them, with
 // probe_summary.json's `partial` saying how many of how many. Reads the checkpoint only: the
 // campaign itself, running or not, is left as it is, and resumes as before.
-void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& checkpoint,
-                   const nlohmann::json& settings, int planned, const fs::path& out) {
+void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& checkpoint, const CampaignSettings& s,
+                   int planned, const fs::path& out) {
   const fs::path dir = o.partial;
   if (launched_by_mpi()) throw Error("--partial reads a checkpoint: run it as one process, not under mpirun");
   std::error_code ec;
@@ -372,10 +372,10 @@ void write_partial(const ProbeOptions& o, const Packing& p, const fs::path& chec
                 "): it has not started, or it has finished and written its outputs there");
   RunTime time;  // this run's: none; the runs' so far: the checkpoint's record
   const std::optional<CampaignState> state =
-      read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, settings, &time.all_runs);
+      read_campaign_checkpoint(read_file(checkpoint), checkpoint.string(), p, to_json(s), &time.all_runs);
   if (!state) throw Error(checkpoint.string() + " was saved from another packing than " + o.dir);
   const DirLock lock(dir, command_line());
-  finish_campaign(o, p, settings, *state, time, dir, planned);
+  finish_campaign(o, p, s, *state, time, dir, planned);
 }
 
 void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s, const fs::path& out) {
@@ -394,7 +394,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   if (!o.partial.empty()) {
     const auto planned = std::count_if(targets.begin(), targets.end(),
                                        [&, shard = shard, shards = shards](int k) { return in_shard(k, shard, shards); });
-    return write_partial(o, p, run.checkpoint, run.settings, static_cast<int>(planned), out);
+    return write_partial(o, p, run.checkpoint, s, static_cast<int>(planned), out);
   }
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
   if (!dist->gathers()) return run_worker(p, s, *dist, running_printer(o, rank_prefix(*dist)), o.running_every);
@@ -432,7 +432,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   if (shards > 1)
     write_shard(o, run.fingerprint, run.settings, state, time, out / shard_file_name("probe_shard", shard, shards));
   else
-    finish_campaign(o, p, run.settings, state, time, out);
+    finish_campaign(o, p, s, state, time, out);
   fs::remove(run.checkpoint);
 }
 
@@ -450,56 +450,34 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
               file.c_str());
 }
 
-// probes.csv, response_field.csv, response_profile.csv, probe_summary.json and the report.
-// planned > 0: the outputs of a campaign's checkpoint (--partial), which has not probed all
-// `planned` contacts yet; its wall time and ranks are unknown (null, []).
-void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::json& settings_json,
-                     const CampaignState& state, const RunTime& time, const fs::path& out, int planned) {
-  const double wall = time.wall;
-  const std::vector<RankLoad>& loads = time.loads;
-  const CampaignSummary sum = summarize(p, state, fit_window(o), o.max_inertia);
-  const PackingStats stats = compute_packing_stats(p);
-  write_file_atomic(out / "probes.csv", rows_csv(state, o.method));
-  write_file_atomic(out / "response_field.csv", state.average.field_csv());
-  write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
-  nlohmann::json summary = campaign_summary_json(p, stats, sum);
-  // cd with a budget (recorded in the settings where set): the probes it stopped, whose
-  // sweeps (pieces of all paths) exceed it by the one not taken.
-  const long long max_pieces = settings_json.value("cd_max_pieces", 0LL);
-  const OverBudget over_budget = probes_over_budget(state, max_pieces);
-  if (max_pieces > 0)
-    summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget.probes}, {"exact", over_budget.exact}};
-  // cd with a residual it accepts (recorded where set): the probes near-exact within it.
-  const double accept = settings_json.value("cd_accept_residual", 0.0);
-  const int accepted = probes_accepted(state, accept);
-  if (accept > 0.0) summary["accepted"] = {{"accept_residual", accept}, {"probes", accepted}};
-  summary["program_version"] = kVersion;
-  summary["command"] = command_line();
-  summary["packing"] = o.dir;
-  summary["settings"] = settings_json;
-  summary["method"] = o.method;
-  summary["g"] = o.g;
-  summary["wall_seconds"] = planned > 0 ? nlohmann::json(nullptr) : nlohmann::json(wall);
-  summary["ranks"] = rank_loads_json<nlohmann::json>(loads, "probes");
-  summary["all_runs"] = to_json(time.all_runs);
-  if (planned > 0) summary["partial"] = {{"probes_done", sum.probes}, {"probes_planned", planned}};
-  write_file_atomic(out / "probe_summary.json", summary.dump(2));
+// The accepted residual of a cd campaign (g; 0: none, only exact probes stop it early).
+double accepted_residual(const CampaignSettings& s) {
+  return s.method == ProbeMethod::kCd && s.cd.accept_residual != CdPathSettings{}.accept_residual
+             ? s.cd.accept_residual
+             : 0.0;
+}
 
+// The campaign's report on stdout: its means, the probes left out, the inertia and states of
+// the steps, the fit of d(r) and the time of its runs.
+void print_campaign_report(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
+                           const CampaignSummary& sum, const PackingStats& stats, const OverBudget& over_budget,
+                           int accepted, const RunTime& time, const fs::path& out, int planned) {
+  const char* method = method_name(s.method);
   if (planned > 0)
     std::printf("%d of %d probes of %s (method %s) so far, from the campaign's checkpoint -> %s (partial)\n",
-                sum.probes, planned, o.dir.c_str(), o.method.c_str(), out.c_str());
+                sum.probes, planned, o.dir.c_str(), method, out.c_str());
   else
-    std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(), o.method.c_str(),
-                format_duration(wall).c_str(), out.c_str());
+    std::printf("%d probes of %s (method %s) in %s -> %s\n", sum.probes, o.dir.c_str(), method,
+                format_duration(time.wall).c_str(), out.c_str());
   std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.contact.mu, stats.phi,
               stats.z, sum.F_cont_over_F0);
   std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d", sum.F_crit_over_F_cont, sum.not_converged);
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");
-  if (max_pieces > 0) {
-    std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes", max_pieces,
-                over_budget.probes);
+  if (s.cd.max_probe_pieces > 0) {  // cd only (validate)
+    std::printf("  stopped by the budget of %lld pieces per probe (--cd-max-pieces): %d probes",
+                s.cd.max_probe_pieces, over_budget.probes);
     // Exact all the same: their lowerings went on past an exact solution (at low friction
     // --cd-settle-compliance ends them there).
     if (over_budget.exact > 0)
@@ -508,12 +486,12 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
                   over_budget.exact);
     std::printf("\n");
   }
-  if (accept > 0.0)
+  if (const double accept = accepted_residual(s); accept > 0.0)
     std::printf("  near-exact within the accepted residual of %g g (--cd-accept-residual): %d probes\n", accept,
                 accepted);
-  if (o.max_inertia > 0.0)
+  if (s.max_inertia > 0.0)
     std::printf("  left out of the means and averages: %d probes with f_inertia above %g F0 (--max-inertia)\n",
-                sum.inertial, o.max_inertia);
+                sum.inertial, s.max_inertia);
   if (sum.inertia_probes > 0) {
     std::printf("  inertia of the step (largest net force on a grain) / F0: median %.2e, largest %.2e (contact %d)",
                 sum.f_inertia_median_over_F0, sum.f_inertia_max_over_F0, sum.f_inertia_max_contact);
@@ -530,10 +508,10 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
   else
     std::printf("  no power-law fit: %s\n", sum.fit_error.c_str());
   // A windowed campaign's fields are zero beyond the window: its d(r) is the clamp's.
-  if (const double window = settings_json.value("window_d", 0.0); window > 0.0)
+  if (s.nlgs.window > 0.0)
     std::printf("  d(r) and alpha are those of windows of %g mean diameters, every grain beyond clamped: not the "
                 "whole packing's decay (docs/probe.md, \"A window around the probed pair\")\n",
-                window);
+                s.nlgs.window);
   const CampaignTime& all = time.all_runs;
   if (all.runs > 1 || all.untimed > 0 || planned > 0) {
     std::printf("  over %d run%s: %s of wall time, %s busy", all.runs, all.runs == 1 ? "" : "s",
@@ -548,10 +526,45 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const nlohmann::js
       std::printf("; %lld probes from a checkpoint that did not record its time", all.untimed);
     std::printf("\n");
   }
-  if (loads.size() > 1)
-    for (const RankLoad& l : loads)
+  if (time.loads.size() > 1)
+    for (const RankLoad& l : time.loads)
       std::printf("  rank %d: %lld probes, %s busy (%d threads)\n", l.rank, l.tasks,
                   format_duration(l.busy_seconds).c_str(), l.threads);
+}
+
+// probes.csv, response_field.csv, response_profile.csv, probe_summary.json and the report.
+// planned > 0: the outputs of a campaign's checkpoint (--partial), which has not probed all
+// `planned` contacts yet; its wall time and ranks are unknown (null, []).
+void finish_campaign(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
+                     const CampaignState& state, const RunTime& time, const fs::path& out, int planned) {
+  const CampaignSummary sum = summarize(p, state, fit_window(o), s.max_inertia);
+  const PackingStats stats = compute_packing_stats(p);
+  write_file_atomic(out / "probes.csv", rows_csv(state, method_name(s.method)));
+  write_file_atomic(out / "response_field.csv", state.average.field_csv());
+  write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
+  nlohmann::json summary = campaign_summary_json(p, stats, sum);
+  // cd with a budget: the probes it stopped, whose sweeps (pieces of all paths) exceed it by
+  // the one not taken.
+  const long long max_pieces = s.cd.max_probe_pieces;  // > 0: cd only (validate)
+  const OverBudget over_budget = probes_over_budget(state, max_pieces);
+  if (max_pieces > 0)
+    summary["over_budget"] = {{"max_pieces", max_pieces}, {"probes", over_budget.probes}, {"exact", over_budget.exact}};
+  // cd with a residual it accepts: the probes near-exact within it.
+  const double accept = accepted_residual(s);
+  const int accepted = probes_accepted(state, accept);
+  if (accept > 0.0) summary["accepted"] = {{"accept_residual", accept}, {"probes", accepted}};
+  summary["program_version"] = kVersion;
+  summary["command"] = command_line();
+  summary["packing"] = o.dir;
+  summary["settings"] = to_json(s);
+  summary["method"] = method_name(s.method);
+  summary["g"] = s.nlgs.g;
+  summary["wall_seconds"] = planned > 0 ? nlohmann::json(nullptr) : nlohmann::json(time.wall);
+  summary["ranks"] = rank_loads_json<nlohmann::json>(time.loads, "probes");
+  summary["all_runs"] = to_json(time.all_runs);
+  if (planned > 0) summary["partial"] = {{"probes_done", sum.probes}, {"probes_planned", planned}};
+  write_file_atomic(out / "probe_summary.json", summary.dump(2));
+  print_campaign_report(o, p, s, sum, stats, over_budget, accepted, time, out, planned);
 }
 
 void run(const ProbeOptions& o) {
@@ -586,13 +599,10 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   ProbeOptions o;
   o.dir = dir;
   const nlohmann::json& first = shards.front();
-  // The method, g and --max-inertia of the settings the shards' campaign records (read back by
-  // campaign_settings_from_json, which refuses a record it would not have written on p).
+  // The settings the shards' campaign records, read back (campaign_settings_from_json refuses
+  // a record it would not have written on p).
   const CampaignSettings s =
       campaign_settings_from_json(first.at("settings"), p, "the settings of the shards in " + out.string());
-  o.method = method_name(s.method);
-  o.g = s.nlgs.g;
-  o.max_inertia = s.max_inertia;
   o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
   CampaignState state = empty_campaign_state(p);
   RunTime time;
@@ -617,7 +627,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   }
   std::sort(state.rows.begin(), state.rows.end(),
             [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
-  finish_campaign(o, p, first.at("settings"), state, time, out);
+  finish_campaign(o, p, s, state, time, out);
   return true;
 }
 
