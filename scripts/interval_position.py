@@ -239,12 +239,13 @@ def markdown(pairs, command):
 def figure(pairs, ts, ratios):
     import matplotlib.pyplot as plt
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
-    for p, t, q in zip(pairs, ts, ratios):
+    colours = plt.get_cmap("tab10" if len(pairs) <= 10 else "tab20")  # one colour per packing
+    for n, (p, t, q) in enumerate(zip(pairs, ts, ratios)):
         for axis, v in ((ax, t), (bx, [max(x, ZERO_FORCE) for x in q])):
             if v:
                 v = sorted(v)
                 axis.step(v, [(i + 1) / len(v) for i in range(len(v))], where="post",
-                          label=pair_name(p))
+                          label=pair_name(p), color=colours(n % colours.N))
     ax.set_xlabel("t = (F_crit - fn_min) / (fn_max - fn_min)")
     ax.set_ylabel("fraction of the solved probes")
     ax.set_xlim(-0.02, 1.02)
