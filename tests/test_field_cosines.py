@@ -30,6 +30,12 @@ def run(*args, ok=True):
     return r
 
 
+def probe_campaign(packing, out, *options):
+    """`unjam probe PACKING OPTIONS --threads 1 --out OUT --quiet`: a campaign to probe again."""
+    subprocess.run([UNJAM, "probe", str(packing), *map(str, options), "--threads", "1", "--out", str(out),
+                    "--quiet"], check=True, capture_output=True)
+
+
 def rows(out):
     with open(out / "fields.csv", newline="") as f:
         return list(csv.DictReader(f))
@@ -136,8 +142,7 @@ def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
 
 
 def test_the_contacts_of_a_campaign(tmp_path):
-    subprocess.run([UNJAM, "probe", P50, "--sample", "5", "--seed", "2", "--threads", "1",
-                    "--out", str(tmp_path / "c"), "--quiet"], check=True, capture_output=True)
+    probe_campaign(P50, tmp_path / "c", "--sample", 5, "--seed", 2)
     with open(tmp_path / "c" / "probes.csv", newline="") as f:
         campaign = [r["contact"] for r in csv.DictReader(f)]
     run(P50, "--from-campaign", tmp_path / "c" / "probes.csv", "--limit", 3, "--out", tmp_path / "f")
@@ -149,9 +154,8 @@ def test_a_cd_campaigns_own_settings_probe_its_contacts_again(tmp_path):
     # them, and every F_crit is the campaign's, bit for bit.
     p50 = str(REPO / "tests" / "fixtures" / "p50-mu1")
     c = tmp_path / "c"
-    subprocess.run([UNJAM, "probe", p50, "--sample", "8", "--seed", "2", "--method", "cd",
-                    "--cd-start", "compliant", "--cd-compliant-start", "1e-3", "--cd-max-pieces", "5000",
-                    "--threads", "1", "--out", str(c), "--quiet"], check=True, capture_output=True)
+    probe_campaign(p50, c, "--sample", 8, "--seed", 2, "--method", "cd", "--cd-start", "compliant",
+                   "--cd-compliant-start", "1e-3", "--cd-max-pieces", 5000)
     run(p50, "--from-campaign", c / "probes.csv", "--threads", 1, "--out", tmp_path / "f")
     s = json.loads((tmp_path / "f" / "fields.json").read_text())
     assert s["settings_from_campaign"] and s["cd_start"] == "compliant" and s["dt"] == 0.01
@@ -193,9 +197,8 @@ def test_a_windowed_interior_campaign_is_probed_again_as_it_was(tmp_path):
     # The interior start in a window of 3 mean diameters: the window and the interior start's
     # settings come back from the record, and every F_crit is the campaign's, bit for bit.
     c = tmp_path / "c"
-    subprocess.run([UNJAM, "probe", P50, "--sample", "4", "--seed", "3", "--method", "cd",
-                    "--cd-start", "interior", "--window", "3", "--cd-interior-iterations", "60",
-                    "--threads", "1", "--out", str(c), "--quiet"], check=True, capture_output=True)
+    probe_campaign(P50, c, "--sample", 4, "--seed", 3, "--method", "cd", "--cd-start", "interior", "--window", 3,
+                   "--cd-interior-iterations", 60)
     run(P50, "--from-campaign", c / "probes.csv", "--threads", 1, "--out", tmp_path / "f")
     s = json.loads((tmp_path / "f" / "fields.json").read_text())
     assert s["window"] == 3.0 and s["cd_start"] == "interior" and s["cd"]["interior_iterations"] == 60

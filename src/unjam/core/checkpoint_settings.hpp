@@ -12,25 +12,32 @@
 
 namespace unjam {
 
+// The keys whose values differ between the settings objects a and b, in key order:
+//   "<key>: <a's value> <a_word>, <b's value> <b_word>, ..."
+// (a key missing on one side reads "none"); empty where either is not an object.
+inline std::string settings_differences(const nlohmann::json& a, const nlohmann::json& b, const std::string& a_word,
+                                        const std::string& b_word) {
+  std::string diff;
+  if (!a.is_object() || !b.is_object()) return diff;
+  std::set<std::string> keys;
+  for (const auto& [k, v] : a.items()) keys.insert(k);
+  for (const auto& [k, v] : b.items()) keys.insert(k);
+  for (const std::string& k : keys) {
+    const auto x = a.find(k), y = b.find(k);
+    const std::string in_a = x == a.end() ? "none" : x->dump(), in_b = y == b.end() ? "none" : y->dump();
+    if (in_a != in_b) diff += (diff.empty() ? "" : ", ") + k + ": " + in_a + " " + a_word + ", " + in_b + " " + b_word;
+  }
+  return diff;
+}
+
 // Throws unjam::Error unless `saved` (the checkpoint's settings) equals `now` (this run's):
 //   "<name> belongs to a run with other settings (<key>: <saved> there, <now> here, ...);
 //    give its settings to resume it, or remove it to start over"
-// (a key missing on one side reads "none"; no list where `saved` is not an object).
+// (settings_differences; no list where `saved` is not an object).
 inline void require_same_settings(const nlohmann::json& saved, const nlohmann::json& now, const std::string& name) {
   if (saved == now) return;
-  std::string diff;
-  if (saved.is_object() && now.is_object()) {
-    std::set<std::string> keys;
-    for (const auto& [k, v] : saved.items()) keys.insert(k);
-    for (const auto& [k, v] : now.items()) keys.insert(k);
-    for (const std::string& k : keys) {
-      const auto a = saved.find(k), b = now.find(k);
-      const std::string was = a == saved.end() ? "none" : a->dump(), is = b == now.end() ? "none" : b->dump();
-      if (was != is) diff += (diff.empty() ? " (" : ", ") + k + ": " + was + " there, " + is + " here";
-    }
-    if (!diff.empty()) diff += ")";
-  }
-  throw Error(name + " belongs to a run with other settings" + diff +
+  const std::string diff = settings_differences(saved, now, "there", "here");
+  throw Error(name + " belongs to a run with other settings" + (diff.empty() ? "" : " (" + diff + ")") +
               "; give its settings to resume it, or remove it to start over");
 }
 

@@ -578,17 +578,9 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
   }
   // What the record holds and the settings do not give back: a key of another method or start,
   // a default written out, another packing's contact model.
-  const nlohmann::json again = to_json(s);
-  if (again != j) {
-    std::string diff;
-    for (const auto& [key, value] : j.items())
-      if (!again.contains(key) || again.at(key) != value)
-        diff += (diff.empty() ? "" : ", ") + key + ": " + value.dump() + " recorded, " +
-                (again.contains(key) ? again.at(key).dump() : std::string("none")) + " read back";
-    for (const auto& [key, value] : again.items())
-      if (!j.contains(key)) diff += (diff.empty() ? "" : ", ") + key + ": none recorded, " + value.dump() + " read back";
-    throw Error(name + " are not what unjam probe records on this packing (" + diff + ")");
-  }
+  if (const nlohmann::json again = to_json(s); again != j)
+    throw Error(name + " are not what unjam probe records on this packing (" +
+                settings_differences(j, again, "recorded", "read back") + ")");
   return s;
 }
 
