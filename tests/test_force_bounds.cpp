@@ -1,13 +1,18 @@
 // Exact per-contact normal-force intervals by LP: fixtures against an independent LP (HiGHS),
-// hand-made systems with known answers, monotonicity in mu, the command-line tool.
+// hand-made systems with known answers, monotonicity in mu, runs stopped and resumed through
+// their checkpoint (campaign/bounds_checkpoint), the command-line tool.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
+#include "unjam/campaign/bounds_checkpoint.hpp"
+#include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/lp/rank.hpp"
@@ -280,6 +285,106 @@ TEST(ForceBounds, InfeasibleSystemIsReported) {
   } catch (const unjam::Error& e) {
     EXPECT_NE(std::string(e.what()).find("no admissible force network"), std::string::npos);
   }
+}
+
+// A run stopped every 40 LPs (alternately on 1 and 2 threads) and resumed from its checkpoint
+// until it is complete gives the bits of one uninterrupted run, solves no LP twice and records
+// the time of every run.
+TEST(BoundsCheckpoint, StoppedRunsResumeToTheBitsOfOneRun) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  unjam::ForceBoundsOptions one;
+  int lps_of_one = 0;
+  one.checkpoint = [&](const unjam::ForceBounds&) { ++lps_of_one; };
+  const unjam::ForceBounds whole = unjam::compute_force_bounds(sys, one);
+  const fs::path file = fs::temp_directory_path() / "unjam_test_bounds_checkpoint.json";
+  fs::remove(file);
+  const auto settings =
+      unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "barrier", "", sys.num_contacts());
+  unjam::ForceBounds b;
+  int runs = 0, lps = 0;
+  do {
+    const unjam::BoundsCheckpoint c(file, settings);
+    ASSERT_EQ(c.resumed() != nullptr, runs > 0);
+    EXPECT_EQ(c.earlier().runs, runs);
+    EXPECT_EQ(c.earlier().wall_seconds, 1.5 * runs);
+    if (c.resumed()) EXPECT_GE(unjam::known_values(*c.resumed()), lps);  // every LP solved gave a value
+    unjam::ForceBoundsOptions lp;
+    lp.threads = 1 + runs % 2;
+    c.attach(lp, 1e9, 40, nullptr, [&c] { return c.earlier() + unjam::CampaignTime{1, 1.5, 2.5, 0}; });
+    const auto count = lp.checkpoint;
+    lp.checkpoint = [&](const unjam::ForceBounds& x) { ++lps; count(x); };
+    b = unjam::compute_force_bounds(sys, lp);
+    if (b.complete) c.remove();
+    else c.save(b, c.earlier() + unjam::CampaignTime{1, 1.5, 2.5, 0});
+    ++runs;
+  } while (!b.complete && runs < 20);
+  EXPECT_GE(runs, 3);
+  EXPECT_TRUE(b.complete);
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_EQ(lps, lps_of_one);  // no LP solved twice
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    EXPECT_EQ(b.fn_min[k], whole.fn_min[k]) << k;
+    EXPECT_EQ(b.fn_max[k], whole.fn_max[k]) << k;
+  }
+  EXPECT_EQ(b.min_lps_skipped, whole.min_lps_skipped);
+  EXPECT_EQ(b.iterations, whole.iterations);
+}
+
+// A checkpoint of another run, or one that is not a checkpoint, is refused with its name and
+// the reason, and left as it is.
+TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const Packing other = unjam::read_packing(fixture_dir("p50-mu1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const int Nc = sys.num_contacts();
+  const fs::path file = fs::temp_directory_path() / "unjam_test_bounds_checkpoint_refused.json";
+  const auto settings = unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "barrier", "", Nc);
+  unjam::ForceBounds partial;
+  partial.fn_min = partial.fn_max = Eigen::VectorXd::Constant(Nc, std::nan(""));
+  partial.fn_max[3] = 2.5;
+  partial.iterations = 17;
+  const auto refused = [&](const nlohmann::json& now, const std::string& why) {
+    const std::string before = unjam::read_file(file);
+    try {
+      unjam::BoundsCheckpoint c(file, now);
+      ADD_FAILURE() << "accepted; expected: " << why;
+    } catch (const unjam::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(unjam::read_file(file), before);
+  };
+  unjam::BoundsCheckpoint(file, settings).save(partial, {});
+  {
+    const unjam::BoundsCheckpoint c(file, settings);  // its own run reads it back
+    ASSERT_NE(c.resumed(), nullptr);
+    EXPECT_EQ(c.resumed()->fn_max[3], 2.5);
+    EXPECT_TRUE(std::isnan(c.resumed()->fn_max[4]));
+    EXPECT_EQ(c.resumed()->iterations, 17);
+    EXPECT_EQ(unjam::known_values(*c.resumed()), 1);
+  }
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-8, "barrier", "", Nc), "fn_tol");
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "simplex", "", Nc), "method");
+  refused(unjam::bounds_checkpoint_settings("p50", other, 1e-9, 1e-9, "barrier", "", Nc), "packing_fingerprint");
+  const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
+    auto j = nlohmann::json::parse(unjam::read_file(file));
+    edit(j);
+    unjam::write_file_atomic(file, j.dump());
+  };
+  edited([](nlohmann::json& j) { j["fn_max"].erase(0); });
+  refused(settings, "damaged (80 values for 81 contacts)");
+  fs::remove(file);
+  unjam::BoundsCheckpoint(file, settings).save(partial, {});
+  edited([](nlohmann::json& j) { j["fn_min"][2] = "x"; });
+  refused(settings, "damaged");
+  fs::remove(file);
+  unjam::BoundsCheckpoint(file, settings).save(partial, {});
+  edited([](nlohmann::json& j) { j.erase("iterations"); });
+  refused(settings, "damaged");
+  unjam::write_file_atomic(file, "{\"settings\": ");
+  refused(settings, "not a bounds checkpoint");
+  fs::remove(file);
 }
 
 TEST(ForceBounds, CommandWritesCsvAndJson) {

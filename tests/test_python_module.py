@@ -132,6 +132,37 @@ def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
     assert np.all(b["fn_min"] <= b["fn"] + 1e-9) and np.all(b["fn"] <= b["fn_max"] + 1e-9)
 
 
+def test_bounds_resume_a_stopped_runs_checkpoint_bit_for_bit(tmp_path, p50):
+    """The checkpoint of `unjam bounds --stop-after` (its packing unnamed, as the module names
+    it) resumed by unjam.bounds(checkpoint=...): the intervals of one uninterrupted run, the
+    file removed at the end; a checkpoint of other settings is refused and kept."""
+    tool("bounds", FIXTURE, "--threads", 1, "--out", tmp_path / "whole" / "bounds.csv")
+    whole = read_csv(tmp_path / "whole" / "bounds.csv")
+    r = subprocess.run([UNJAM, "bounds", FIXTURE, "--threads", "1", "--stop-after", "30", "--out",
+                        str(tmp_path / "stopped" / "bounds.csv")], capture_output=True, text=True)
+    assert r.returncode == 3, r.stderr
+    saved = json.loads((tmp_path / "stopped" / "bounds_checkpoint.json").read_text())
+    known = sum(x is not None for x in saved["fn_min"] + saved["fn_max"])
+    assert 30 <= known < 2 * len(whole)
+    saved["settings"]["packing"] = ""
+    checkpoint = tmp_path / "checkpoint.json"
+    checkpoint.write_text(json.dumps(saved))
+    with pytest.raises(unjam.Error, match=r"fn_tol: 1e-09 there, 1e-08 here"):
+        unjam.bounds(p50, fn_tol=1e-8, checkpoint=checkpoint)
+    with pytest.raises(unjam.Error, match="method"):
+        unjam.bounds(p50, method="simplex", checkpoint=checkpoint)
+    assert json.loads(checkpoint.read_text()) == saved
+    b = unjam.bounds(p50, threads=2, checkpoint=checkpoint)
+    for name in ("fn_min", "fn_max"):
+        assert [float(x[name]) for x in whole] == b[name].tolist()
+    for i, (lo, hi) in enumerate(zip(saved["fn_min"], saved["fn_max"])):
+        assert lo in (None, b["fn_min"][i]) and hi in (None, b["fn_max"][i])
+    assert not checkpoint.exists()
+    # A checkpoint file that is not there yet: a run from scratch, nothing left behind.
+    b = unjam.bounds(p50, threads=1, checkpoint=checkpoint)
+    assert [float(x["fn_max"]) for x in whole] == b["fn_max"].tolist() and not checkpoint.exists()
+
+
 def help_defaults(command):
     """{option: default} from `unjam COMMAND --help` (CLI11 prints "--n INT=500", and with a
     check of the value "--threads INT:NUMBER >= 0=0")."""
@@ -530,6 +561,26 @@ def test_ctrl_c_stops_a_long_call(setup, call):
         f"import unjam\n{setup}\nprint('ready', flush=True)\n{call}\nprint('done', flush=True)\n")
     assert seconds < 5.0 and rc != 0 and "done" not in out
     assert "KeyboardInterrupt" in err and "line 4" in err  # in the call
+
+
+def test_ctrl_c_of_bounds_saves_its_checkpoint_and_the_resumed_run_loses_nothing(tmp_path):
+    """unjam.bounds(checkpoint=...) stopped by Ctrl-C saves the intervals known so far; the
+    same call resumes from them and ends with the intervals of one uninterrupted run."""
+    checkpoint = tmp_path / "bounds_checkpoint.json"
+    seconds, rc, out, err = interrupted(
+        f"import unjam\np = unjam.pack(n=150, seed=3, threads=1)\np.write({str(tmp_path / 'p')!r})\n"
+        f"print('ready', flush=True)\nunjam.bounds(p, threads=2, checkpoint={str(checkpoint)!r})\n"
+        "print('done', flush=True)\n")
+    assert seconds < 5.0 and rc != 0 and "done" not in out and "KeyboardInterrupt" in err
+    saved = json.loads(checkpoint.read_text())
+    known = sum(x is not None for x in saved["fn_min"] + saved["fn_max"])
+    assert 0 < known < 2 * len(saved["fn_max"]) and saved["runs"]["runs"] == 1
+    p = unjam.read_packing(tmp_path / "p")
+    resumed = unjam.bounds(p, threads=1, checkpoint=checkpoint)
+    whole = unjam.bounds(p, threads=2)
+    assert not checkpoint.exists()
+    for name in ("fn_min", "fn_max"):
+        assert resumed[name].tolist() == whole[name].tolist()
 
 
 def test_pack_progress_callback_and_its_exception():

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -20,11 +19,11 @@
 #include "cli/options.hpp"
 #include "cli/run_info.hpp"
 #include "cli/shards.hpp"
+#include "unjam/campaign/bounds_checkpoint.hpp"
 #include "unjam/campaign/distributor.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/campaign_time.hpp"
-#include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/rank_loads_json.hpp"
@@ -206,82 +205,6 @@ std::filesystem::path checkpoint_path(const BoundsOptions& opt, int shard, int s
   return output_dir(opt) / (shards > 1 ? shard_file_name("bounds_checkpoint-shard", shard, shards) : "bounds_checkpoint.json");
 }
 
-// A vector with NaN (not known yet) as JSON null, and back.
-nlohmann::json values_json(const Eigen::VectorXd& v) {
-  nlohmann::json j = nlohmann::json::array();
-  for (const double x : v) j.push_back(std::isnan(x) ? nlohmann::json() : nlohmann::json(x));
-  return j;
-}
-Eigen::VectorXd values_of(const nlohmann::json& j) {
-  Eigen::VectorXd v(static_cast<Eigen::Index>(j.size()));
-  for (std::size_t i = 0; i < j.size(); ++i) v[i] = j[i].is_null() ? std::nan("") : j[i].get<double>();
-  return v;
-}
-
-// What identifies the run a checkpoint belongs to.
-nlohmann::json checkpoint_settings(const BoundsOptions& opt, const Packing& packing, int Nc) {
-  return {{"packing", opt.dir}, {"packing_fingerprint", packing_fingerprint(packing)}, {"gap_tol", opt.gap_tol},
-          {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"shard", opt.shard}, {"contacts", Nc}};
-}
-
-// The LP values a partial result holds (fn_min and fn_max known).
-long long known_values(const ForceBounds& b) {
-  return static_cast<long long>((b.fn_min.array() == b.fn_min.array()).count() +
-                                (b.fn_max.array() == b.fn_max.array()).count());
-}
-
-// The partial result saved in `file`, if there is one (and it is of this run), and the time
-// of the runs that made it (`earlier`; its untimed: the LP values of a checkpoint without it).
-std::optional<ForceBounds> read_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings,
-                                           CampaignTime& earlier) {
-  if (!std::filesystem::exists(file)) return std::nullopt;
-  const auto j = nlohmann::json::parse(read_file(file), nullptr, false);
-  if (j.is_discarded()) throw Error(file.string() + " is not valid JSON; remove it to start over");
-  require_same_settings(j.value("settings", nlohmann::json{}), settings, file.string());
-  ForceBounds b;
-  b.fn_min = values_of(j.at("fn_min"));
-  b.fn_max = values_of(j.at("fn_max"));
-  b.min_lps_skipped = j.at("min_lps_skipped").get<int>();
-  b.iterations = j.at("iterations").get<long long>();
-  b.loosened_solves = j.at("loosened_solves").get<long long>();
-  b.complete = false;
-  earlier = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(b));
-  return b;
-}
-
-// The checkpoint, with the time of the runs so far (`runs`).
-void write_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings, const ForceBounds& b,
-                      const CampaignTime& runs) {
-  write_file_atomic(file, nlohmann::json{{"settings", settings}, {"fn_min", values_json(b.fn_min)},
-                                         {"fn_max", values_json(b.fn_max)}, {"min_lps_skipped", b.min_lps_skipped},
-                                         {"iterations", b.iterations}, {"loosened_solves", b.loosened_solves},
-                                         {"runs", to_json(runs)}}
-                              .dump());
-}
-
-// On the gathering process: resume from the checkpoint (and the time of its runs, `earlier`),
-// save one every opt.checkpoint_s seconds with the runs' time so far (`time_so_far`), stop
-// on Ctrl-C / SIGTERM or after opt.stop_after LPs.
-void add_checkpoints(const BoundsOptions& opt, const std::filesystem::path& file, const nlohmann::json& settings,
-                     std::optional<ForceBounds>& resumed, CampaignTime& earlier,
-                     const std::function<CampaignTime()>& time_so_far, ForceBoundsOptions& lp) {
-  resumed = read_checkpoint(file, settings, earlier);
-  if (resumed) {
-    lp.resume = &*resumed;
-    std::fprintf(stderr, "resuming from %s\n", file.c_str());
-  }
-  auto solved = std::make_shared<int>(0);
-  lp.should_stop = [&opt, solved] {
-    return InterruptGuard::requested() || (opt.stop_after > 0 && *solved >= opt.stop_after);
-  };
-  lp.checkpoint = [&opt, file, settings, solved, time_so_far, last = std::chrono::steady_clock::now()](const ForceBounds& b) mutable {
-    ++*solved;
-    if (seconds_since(last) < opt.checkpoint_s && !InterruptGuard::requested()) return;
-    last = std::chrono::steady_clock::now();
-    write_checkpoint(file, settings, b, time_so_far());
-  };
-}
-
 // The admissible set of the packing's own contact model with touch_gap = --gap-tol.
 EquilibriumSystem bounds_system(const Packing& packing, const BoundsOptions& opt) {
   return admissible_system(packing, with_touch_gap(packing.meta.contact, opt.gap_tol), opt.fn_tol);
@@ -299,15 +222,22 @@ void run_bounds(const BoundsOptions& opt) {
   BoundsRun run;
   run.t_build = seconds_since(t_start);
   ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
-  const std::filesystem::path checkpoint = checkpoint_path(opt, shard, shards);
-  const nlohmann::json settings = checkpoint_settings(opt, packing, sys.num_contacts());
-  std::optional<ForceBounds> resumed;
-  CampaignTime earlier;
+  // Only the gathering process reads, saves and removes the checkpoint.
+  std::optional<BoundsCheckpoint> checkpoint;
+  if (dist->gathers())
+    checkpoint.emplace(checkpoint_path(opt, shard, shards),
+                       bounds_checkpoint_settings(opt.dir, packing, opt.gap_tol, opt.fn_tol, opt.method, opt.shard,
+                                                  sys.num_contacts()));
+  const CampaignTime earlier = checkpoint ? checkpoint->earlier() : CampaignTime{};
   // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
   // distributor has them; the checkpoint hook runs within the gathering, under its lock).
   const auto time_so_far = [&] { return earlier + one_run(seconds_since(t_start), dist->loads()); };
-  if (dist->gathers()) add_checkpoints(opt, checkpoint, settings, resumed, earlier, time_so_far, lp);
-  else lp.should_stop = InterruptGuard::requested;
+  if (checkpoint) {
+    if (checkpoint->resumed()) std::fprintf(stderr, "resuming from %s\n", checkpoint->file().c_str());
+    checkpoint->attach(lp, opt.checkpoint_s, opt.stop_after, InterruptGuard::requested, time_so_far);
+  } else {
+    lp.should_stop = InterruptGuard::requested;
+  }
   ForceBounds bounds;
   {
     const InterruptGuard interrupts;
@@ -315,10 +245,10 @@ void run_bounds(const BoundsOptions& opt) {
   }
   if (!dist->gathers()) return;
   if (!bounds.complete) {
-    write_checkpoint(checkpoint, settings, bounds, time_so_far());
-    throw Interrupted("stopped (" + checkpoint.string() + " saved); run the same command again to resume");
+    checkpoint->save(bounds, time_so_far());
+    throw Interrupted("stopped (" + checkpoint->file().string() + " saved); run the same command again to resume");
   }
-  std::filesystem::remove(checkpoint);
+  checkpoint->remove();
   run.loads = dist->loads();
   run.all_runs = time_so_far();
   if (shards > 1) return write_bounds_shard(opt, shard, shards, bounds, run);

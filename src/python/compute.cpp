@@ -3,6 +3,7 @@
 // defaults (taken from the library's settings structs where the tool takes them too).
 #include <omp.h>
 
+#include <chrono>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -14,9 +15,11 @@
 
 #include "python/bindings.hpp"
 #include "unjam/analysis/packing_stats.hpp"
+#include "unjam/campaign/bounds_checkpoint.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/work_source.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
 #include "unjam/lp/rank.hpp"
 #include "unjam/packing/export.hpp"
@@ -207,13 +210,21 @@ py::dict campaign_settings(const Packing& p, const std::filesystem::path& path) 
   return d;
 }
 
-py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method) {
+// With `checkpoint` (a file path): resumes from it if it is there (a checkpoint of another
+// packing or other settings is refused), saves it every `checkpoint_every` seconds and when
+// interrupted, and removes it once every interval is known (campaign/bounds_checkpoint; the
+// file is that of `unjam bounds`, with the packing unnamed).
+py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method,
+                const std::optional<std::filesystem::path>& checkpoint, double checkpoint_every) {
   if (method != "barrier" && method != "simplex") throw Error("method must be barrier or simplex");
+  if (!(checkpoint_every >= 0.0)) throw Error("checkpoint_every must be a non-negative number of seconds");
+  const auto t_start = std::chrono::steady_clock::now();
   ForceBoundsOptions lp;
   lp.method = method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
   SignalPoll poll;
   lp.should_stop = [&poll] { return poll(); };
   std::optional<EquilibriumSystem> sys;
+  std::optional<BoundsCheckpoint> saved;
   ForceBounds b;
   RankInfo rank;
   try {
@@ -221,8 +232,19 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     const ThreadCount count(threads);
     lp.threads = omp_get_max_threads();
     sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
-    rank = equilibrium_rank(*sys);
-    b = compute_force_bounds(*sys, lp);  // incomplete if should_stop stopped it
+    LocalDistributor dist;
+    const auto time_so_far = [&] {
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      return saved->earlier() + one_run(wall, dist.loads());
+    };
+    if (checkpoint) {
+      saved.emplace(*checkpoint, bounds_checkpoint_settings("", p, gap_tol, fn_tol, method, "", sys->num_contacts()));
+      saved->attach(lp, checkpoint_every, 0, [&poll] { return poll(); }, time_so_far);
+    }
+    b = compute_force_bounds(*sys, lp, dist);  // incomplete if should_stop stopped it
+    if (saved && !b.complete) saved->save(b, time_so_far());
+    if (saved && b.complete) saved->remove();
+    if (b.complete) rank = equilibrium_rank(*sys);
   } catch (const Error&) {
     poll.rethrow_if_interrupted();
     throw;
@@ -396,7 +418,11 @@ void bind_compute(py::module_& m) {
         "tool would not have written on this packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
-        "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`");
+        py::arg("checkpoint") = py::none(), py::arg("checkpoint_every") = 30.0,
+        "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`. "
+        "checkpoint: a file to resume from (if it is there) and to save the intervals known so far in, "
+        "every checkpoint_every seconds and when interrupted (Ctrl-C: KeyboardInterrupt once it is saved); "
+        "removed once every interval is known. A checkpoint of another packing or other settings is refused");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
         "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
   m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),

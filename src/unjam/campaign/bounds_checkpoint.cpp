@@ -1,0 +1,108 @@
+#include "unjam/campaign/bounds_checkpoint.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/core/checkpoint_settings.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/packing/packing_io.hpp"
+
+namespace unjam {
+
+namespace {
+
+// A vector with NaN (not known yet) as JSON null, and back.
+nlohmann::json values_json(const Eigen::VectorXd& v) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const double x : v) j.push_back(std::isnan(x) ? nlohmann::json() : nlohmann::json(x));
+  return j;
+}
+
+Eigen::VectorXd values_of(const nlohmann::json& j) {
+  if (!j.is_array()) throw Error("not an array");
+  Eigen::VectorXd v(static_cast<Eigen::Index>(j.size()));
+  for (std::size_t i = 0; i < j.size(); ++i) {
+    if (!j[i].is_null() && !j[i].is_number()) throw Error("not a number or null");
+    v[static_cast<Eigen::Index>(i)] = j[i].is_null() ? std::nan("") : j[i].get<double>();
+  }
+  return v;
+}
+
+}  // namespace
+
+nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const Packing& packing, double gap_tol,
+                                          double fn_tol, const std::string& method, const std::string& shard,
+                                          int contacts) {
+  return {{"packing", packing_name}, {"packing_fingerprint", packing_fingerprint(packing)}, {"gap_tol", gap_tol},
+          {"fn_tol", fn_tol},        {"method", method},
+          {"shard", shard},          {"contacts", contacts}};
+}
+
+long long known_values(const ForceBounds& b) {
+  return static_cast<long long>((b.fn_min.array() == b.fn_min.array()).count() +
+                                (b.fn_max.array() == b.fn_max.array()).count());
+}
+
+BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
+    : file_(std::move(file)), settings_(std::move(settings)) {
+  if (!std::filesystem::exists(file_)) return;
+  const std::string name = file_.string();
+  const auto j = nlohmann::json::parse(read_file(file_), nullptr, false);
+  if (j.is_discarded() || !j.is_object()) throw Error(name + " is not a bounds checkpoint (not a JSON object); remove it to start over");
+  require_same_settings(j.value("settings", nlohmann::json{}), settings_, name);
+  auto b = std::make_shared<ForceBounds>();
+  try {
+    b->fn_min = values_of(j.at("fn_min"));
+    b->fn_max = values_of(j.at("fn_max"));
+    b->min_lps_skipped = j.at("min_lps_skipped").get<int>();
+    b->iterations = j.at("iterations").get<long long>();
+    b->loosened_solves = j.at("loosened_solves").get<long long>();
+  } catch (const std::exception& e) {
+    throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
+  }
+  const auto contacts = settings_.value("contacts", -1);
+  if (b->fn_min.size() != contacts || b->fn_max.size() != contacts)
+    throw Error(name + " is damaged (" + std::to_string(b->fn_max.size()) + " values for " +
+                std::to_string(contacts) + " contacts); remove it to start over");
+  b->complete = false;
+  earlier_ = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(*b));
+  resumed_ = std::move(b);
+}
+
+void BoundsCheckpoint::attach(ForceBoundsOptions& lp, double every_s, int stop_after, std::function<bool()> stop,
+                              std::function<CampaignTime()> time_so_far) const {
+  lp.resume = resumed();
+  auto solved = std::make_shared<int>(0);
+  lp.should_stop = [stop, stop_after, solved] {
+    return (stop && stop()) || (stop_after > 0 && *solved >= stop_after);
+  };
+  // Called after every LP, one call at a time (ForceBoundsOptions::checkpoint).
+  lp.checkpoint = [this, every_s, stop, solved, time_so_far = std::move(time_so_far),
+                   last = std::chrono::steady_clock::now()](const ForceBounds& b) mutable {
+    ++*solved;
+    const bool stopping = stop && stop();
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last).count() < every_s && !stopping) return;
+    last = std::chrono::steady_clock::now();
+    save(b, time_so_far ? time_so_far() : CampaignTime{});
+  };
+}
+
+void BoundsCheckpoint::save(const ForceBounds& b, const CampaignTime& runs) const {
+  write_file_atomic(file_, nlohmann::json{{"settings", settings_},
+                                          {"fn_min", values_json(b.fn_min)},
+                                          {"fn_max", values_json(b.fn_max)},
+                                          {"min_lps_skipped", b.min_lps_skipped},
+                                          {"iterations", b.iterations},
+                                          {"loosened_solves", b.loosened_solves},
+                                          {"runs", to_json(runs)}}
+                               .dump());
+}
+
+void BoundsCheckpoint::remove() const {
+  std::error_code ec;
+  std::filesystem::remove(file_, ec);
+}
+
+}  // namespace unjam

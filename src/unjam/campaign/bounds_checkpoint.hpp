@@ -1,0 +1,69 @@
+#pragma once
+// The checkpoint of a run of the force bounds (ensemble/force_bounds; `unjam bounds` and
+// unjam.bounds): a JSON file with what identifies the run ("settings"), the interval ends known
+// so far (null: not known yet), the counts of ForceBounds and the time of the runs that made
+// them ("runs", core/campaign_time). A run stopped (Ctrl-C, SIGTERM, a budget of LPs) saves it
+// and the same run resumes from it, solving only the LPs whose values it does not hold; the
+// values do not depend on the thread count, so the resumed run's are those of one uninterrupted
+// run (docs/ensemble.md, "The LP", its last paragraphs).
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "unjam/core/campaign_time.hpp"
+#include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/packing/packing.hpp"
+
+namespace unjam {
+
+// What identifies a run of the bounds: the packing (as named by the run, "packing", and by its
+// contents, "packing_fingerprint"), the admissible set (gap_tol in R_max, fn_tol in F0), the LP
+// method ("barrier" or "simplex"), the shard ("i/K" or empty) and the number of contacts of the
+// system. The thread count is not part of it.
+nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const Packing& packing, double gap_tol,
+                                          double fn_tol, const std::string& method, const std::string& shard,
+                                          int contacts);
+
+// The values known in a partial result: the finite entries of fn_min and fn_max.
+long long known_values(const ForceBounds& b);
+
+// A checkpoint file and the run it belongs to. Constructing it reads the file if there is one:
+// a checkpoint of other settings is refused (unjam::Error naming the settings that differ,
+// core/checkpoint_settings), as is one that is not valid JSON or whose values do not fit the
+// settings' number of contacts.
+class BoundsCheckpoint {
+ public:
+  BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings);
+
+  const std::filesystem::path& file() const { return file_; }
+  // The partial result read from the file, or null where there was none.
+  const ForceBounds* resumed() const { return resumed_ ? resumed_.get() : nullptr; }
+  // The time of the runs that made the resumed values (zero without a checkpoint; its untimed:
+  // the values of a checkpoint that did not record it).
+  const CampaignTime& earlier() const { return earlier_; }
+
+  // Hooks `lp` to the checkpoint: resumes from the values read (lp.resume, pointing into this
+  // object, which must outlive the computation), saves the values known every `every_s`
+  // seconds with the runs' time `time_so_far()`, and stops handing out LPs once `stop()` is
+  // true or `stop_after` (> 0) LPs have been solved in this run. After an incomplete result
+  // call save(); after a complete one, remove().
+  void attach(ForceBoundsOptions& lp, double every_s, int stop_after, std::function<bool()> stop,
+              std::function<CampaignTime()> time_so_far) const;
+
+  // Writes the file (atomically) with the values of `b` and the runs' time `runs`.
+  void save(const ForceBounds& b, const CampaignTime& runs) const;
+  // Removes the file, if there is one.
+  void remove() const;
+
+ private:
+  std::filesystem::path file_;
+  nlohmann::json settings_;
+  std::shared_ptr<const ForceBounds> resumed_;
+  CampaignTime earlier_;
+};
+
+}  // namespace unjam
