@@ -160,12 +160,19 @@ def campaign_settings(a, unjam, p):
     return rec
 
 
-def campaign_f_crit(a):
+def campaign_rows(a):
+    """The contact, f_crit and residual columns of --from-campaign's probes.csv (None with
+    --contacts), read once."""
+    if a.from_campaign is None:
+        return None
+    return unjam_plot.read_csv(a.from_campaign, ["contact", "f_crit", "residual"], min_rows=1)
+
+
+def campaign_f_crit(table):
     """contact -> the campaign's F_crit, None where its probe has no solution (residual
     1.8e308, as kNoSolution in probes.csv)."""
-    rows = unjam_plot.read_csv(a.from_campaign, ["contact", "f_crit", "residual"], min_rows=1)
     return {int(k): (float(f) if float(r) < 1e300 else None)
-            for k, f, r in zip(rows["contact"], rows["f_crit"], rows["residual"])}
+            for k, f, r in zip(table["contact"], table["f_crit"], table["residual"])}
 
 
 def campaign_check(rows, reference):
@@ -180,12 +187,12 @@ def campaign_check(rows, reference):
             "max_relative_difference": max(rel) if rel else 0.0}
 
 
-def listed_contacts(a):
+def listed_contacts(a, table):
+    """The contacts to probe: --contacts, or those of the campaign's table (its first --limit)."""
     if a.contacts is not None:
         ks = a.contacts
     else:
-        rows = unjam_plot.read_csv(a.from_campaign, ["contact"], min_rows=1)
-        ks = [int(k) for k in rows["contact"]]
+        ks = [int(k) for k in table["contact"]]
         ks = ks[:a.limit] if a.limit else ks
     if len(set(ks)) != len(ks):
         sys.exit("field_cosines: a contact is listed twice")
@@ -274,7 +281,8 @@ def main(argv):
     a = parse(argv)
     unjam = import_unjam()
     p = unjam.read_packing(a.packing)
-    ks = listed_contacts(a)
+    table_of_campaign = campaign_rows(a)
+    ks = listed_contacts(a, table_of_campaign)
     from_campaign = campaign_settings(a, unjam, p)
     os.makedirs(a.out, exist_ok=True)
     table = os.path.join(a.out, "fields.csv")
@@ -361,7 +369,7 @@ def main(argv):
         "command": " ".join([os.path.basename(sys.executable), *sys.argv]),
     }
     if from_campaign is not None:
-        check = campaign_check(rows, campaign_f_crit(a))
+        check = campaign_check(rows, campaign_f_crit(table_of_campaign))
         summary["campaign_check"] = check
         if check["differ"]:
             print(f"field_cosines: warning: F_crit(cd) differs from the campaign's on "
