@@ -20,6 +20,12 @@ Rules (per contact of a pair, from the cd run's `residual`):
            docs/probe.md, "The inertia of the step") is above the cd campaign's --max-inertia
            (settings.max_inertia_F0 of its summary, in F0): left out of the means and the
            ratios, as the campaign leaves it out of its own; none where it was not set
+  error    the standard error of a mean R = sum(x) / sum(f_cont) over the n contacts it
+           takes, from the sampling of the contacts (the delta method for a ratio of
+           means): SE = sqrt(sum(e^2) / (n (n - 1))) / mean(f_cont), e = x - R f_cont; for
+           lp minus cd, x = f_crit(lp) - f_crit(cd) on each contact. It says how far another
+           sample of contacts of the same packing would move the mean, not how far another
+           packing would (compare the seeds for that).
 Contacts probed by only one run of a pair are ignored (a warning gives how many and which).
 
 Outputs, each written atomically (a temporary file, then os.replace), in OUT (default
@@ -44,7 +50,11 @@ compare-probes):
                     inertial (solved contacts
                     left out by --max-inertia), f_inertia_median_F0, f_inertia_max_F0 and
                     f_inertia_max_contact (cd's f_inertia / F0 over the solved contacts
-                    that record it; empty for campaigns made before it was recorded)
+                    that record it; empty for campaigns made before it was recorded),
+                    F_crit_over_F_cont_lp_err and F_crit_over_F_cont_cd_err (the standard
+                    errors of the two means over the sampled contacts, see below),
+                    F_crit_over_F_cont_lp_minus_cd (lp's mean minus cd's) and its standard
+                    error F_crit_over_F_cont_lp_minus_cd_err (paired: the same contacts)
   OUT/ratios.csv    one row per shared contact and pair: packing, mu, N, seed, contact,
                     f_cont, f_crit_lp (fn_max), f_crit_cd, ratio (empty where there is none),
                     residual_cd, exact (0/1), solved (0/1), f_inertia_cd (in F0; empty
@@ -98,7 +108,9 @@ COMPARE_COLUMNS = ["packing", "mu", "N", "seed", "label", "probes", "exact", "so
                    "alpha_cd_err", "pieces_median", "cpu_s_per_probe_cd", "inertial",
                    "f_inertia_median_F0", "f_inertia_max_F0", "f_inertia_max_contact",
                    "F_crit_over_F_cont_lp_all", "F_crit_over_F_cont_lp_exact",
-                   "F_crit_over_F_cont_cd_exact"]
+                   "F_crit_over_F_cont_cd_exact", "F_crit_over_F_cont_lp_err",
+                   "F_crit_over_F_cont_cd_err", "F_crit_over_F_cont_lp_minus_cd",
+                   "F_crit_over_F_cont_lp_minus_cd_err"]
 RATIO_COLUMNS = ["packing", "mu", "N", "seed", "contact", "f_cont", "f_crit_lp", "f_crit_cd",
                  "ratio", "residual_cd", "exact", "solved", "f_inertia_cd", "inertial"]
 
@@ -240,6 +252,17 @@ def _list(contacts, most=10):
 # The comparison of one pair
 
 
+def ratio_of_means_err(x, y):
+    """The standard error of sum(x) / sum(y) over n paired samples (x_i, y_i), by the delta
+    method: sqrt(sum(e^2) / (n (n - 1))) / mean(y), e_i = x_i - R y_i; NaN below 2 samples
+    or where sum(y) <= 0."""
+    n = len(x)
+    if n < 2 or sum(y) <= 0:
+        return math.nan
+    r = sum(x) / sum(y)
+    return math.sqrt(sum((a - r * b) ** 2 for a, b in zip(x, y)) / (n * (n - 1))) / (sum(y) / n)
+
+
 def compare_pair(cd, lp, label):
     """(the pair's numbers, its ratios.csv rows, the ratios of its solved contacts)."""
     s_cd = cd["summary"]
@@ -258,6 +281,7 @@ def compare_pair(cd, lp, label):
     packing = {"packing": s_cd["packing"], "mu": _optional_number(cd, "mu"),
                "N": s_cd.get("N"), "seed": s_cd.get("seed")}
     rows, ratios, no_lp, inertia = [], [], [], []
+    taken = []  # (f_cont, f_crit cd, f_crit lp) of the contacts the means take
     sum_cont = sum_cd = sum_lp = 0.0
     # The same sums over every shared contact (lp only) and over the exact ones.
     all_cont = all_lp = exact_cont = exact_cd = exact_lp = 0.0
@@ -290,6 +314,7 @@ def compare_pair(cd, lp, label):
             sum_cont += r["f_cont"]
             sum_cd += r["f_crit"]
             sum_lp += q["f_crit"]
+            taken.append((r["f_cont"], r["f_crit"], q["f_crit"]))
             if q["f_crit"] > 0:
                 ratios.append(ratio)
             else:
@@ -345,6 +370,11 @@ def compare_pair(cd, lp, label):
         "F_crit_over_F_cont_lp_all": all_lp / all_cont if all_cont > 0 else math.nan,
         "F_crit_over_F_cont_lp_exact": exact_lp / exact_cont if exact_cont > 0 else math.nan,
         "F_crit_over_F_cont_cd_exact": exact_cd / exact_cont if exact_cont > 0 else math.nan,
+        "F_crit_over_F_cont_lp_err": ratio_of_means_err([t[2] for t in taken], [t[0] for t in taken]),
+        "F_crit_over_F_cont_cd_err": ratio_of_means_err([t[1] for t in taken], [t[0] for t in taken]),
+        "F_crit_over_F_cont_lp_minus_cd": (sum_lp - sum_cd) / sum_cont if sum_cont > 0 else math.nan,
+        "F_crit_over_F_cont_lp_minus_cd_err": ratio_of_means_err([t[2] - t[1] for t in taken],
+                                                                 [t[0] for t in taken]),
     }
     return numbers, rows, ratios
 
@@ -369,6 +399,13 @@ def _alpha(v, err):
     return f"{v:.2f} ± {err:.2f}" if math.isfinite(err) else f"{v:.2f}"
 
 
+def _mean(v, err):
+    """A mean with its standard error, "1.234 ± 0.012" (the error left out where there is none)."""
+    if not math.isfinite(v):
+        return "–"
+    return f"{v:.3f} ± {err:.3f}" if math.isfinite(err) else f"{v:.3f}"
+
+
 def pair_name(p):
     if p["label"]:
         return p["label"]
@@ -382,14 +419,16 @@ def pair_name(p):
 
 
 TABLE_HEAD = ["pair", "probes", "exact", "solved", "<F_crit>/<F_cont> lp",
-              "<F_crit>/<F_cont> cd", "ratio median [q1, q3]", "ratio min–max",
+              "<F_crit>/<F_cont> cd", "lp - cd", "ratio median [q1, q3]", "ratio min–max",
               "alpha lp", "alpha cd", "pieces", "CPU s/probe cd", "f_inertia/F0 median (max)"]
 
 
 def table_cells(p):
     solved = str(p["solved"]) + (f" ({p['inertial']} inertial)" if p["inertial"] else "")
     return [pair_name(p), str(p["probes"]), str(p["exact"]), solved,
-            _fixed(p["F_crit_over_F_cont_lp"], 3), _fixed(p["F_crit_over_F_cont_cd"], 3),
+            _mean(p["F_crit_over_F_cont_lp"], p["F_crit_over_F_cont_lp_err"]),
+            _mean(p["F_crit_over_F_cont_cd"], p["F_crit_over_F_cont_cd_err"]),
+            _mean(p["F_crit_over_F_cont_lp_minus_cd"], p["F_crit_over_F_cont_lp_minus_cd_err"]),
             f"{_fixed(p['ratio_median'], 3)} [{_fixed(p['ratio_q1'], 3)}, "
             f"{_fixed(p['ratio_q3'], 3)}]",
             f"{_fixed(p['ratio_min'], 3)}–{_fixed(p['ratio_max'], 3)}",
@@ -420,7 +459,9 @@ def markdown(pairs, campaigns, command):
     out += ["",
             f"Contacts probed by both methods; solved: the cd step's residual <= "
             f"{SOLVED_RESIDUAL:g} g, exact: <= {EXACT_RESIDUAL:g} g. <F_crit>/<F_cont>: sums "
-            f"over the contacts solved by cd, both methods on the same contacts. ratio: "
+            f"over the contacts solved by cd, both methods on the same contacts, ± the standard "
+            f"error from the sampling of the contacts (delta method; lp - cd paired on the same "
+            f"contacts). ratio: "
             f"F_crit(cd) / fn_max(lp) per solved contact (quartiles: statistics.quantiles, "
             f"n=4). alpha: the power-law fit of each campaign (± its error). pieces: median "
             f"pieces of the cd path. CPU: the cd campaign's busy seconds per probe, over all its "

@@ -6,14 +6,15 @@ Usage:  /usr/bin/python3 scripts/plot_exact_sweep.py TABLE.csv [--out FILE] [--t
 
 TABLE.csv has one row per packing with the columns
     mu,N,seed,F_crit_over_F_cont_lp,F_crit_over_F_cont_cd
-and optionally alpha_lp, alpha_cd (empty or 'nan' where the fit failed) and alpha_lp_err,
-alpha_cd_err (other columns are ignored): the experiment's exact-probe.csv
+and optionally F_crit_over_F_cont_lp_err, F_crit_over_F_cont_cd_err (the standard errors of the
+means over the sampled contacts, compare_probes.py), alpha_lp, alpha_cd (empty or 'nan' where
+the fit failed) and alpha_lp_err, alpha_cd_err (other columns are ignored): the experiment's exact-probe.csv
 (scripts/experiment.py --cd-sample K), compare.csv of scripts/compare_probes.py, or
 docs/results/exact/summary.csv.
 
   (a) <F_crit>/<F_cont> by lp (open squares, dashed line) and by cd (filled circles, solid
-      line), one colour per N, a marker per packing and the lines through the means over its
-      seeds; the line at 1 is the paper's value at both ends of the mu range;
+      line), one colour per N, a marker per packing (error bars: the means' standard errors,
+      where the table has them) and the lines through the means over its seeds; the line at 1 is the paper's value at both ends of the mu range;
   (b) alpha the same way (error bars: the fits' own, where the table has them); the band is
       the paper's range 0.7-1.4.
 mu spans 0 ... 1, so the mu axis is symlog, linear below 0.01 (mu = 0 on the axis).
@@ -34,6 +35,8 @@ import unjam_plot as up  # noqa: E402
 
 REQUIRED = ["mu", "N", "seed", "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd"]
 ALPHAS = ["alpha_lp", "alpha_cd", "alpha_lp_err", "alpha_cd_err"]
+# Optional columns, NaN where absent or empty: the fits of alpha and the means' standard errors.
+OPTIONAL = ALPHAS + ["F_crit_over_F_cont_lp_err", "F_crit_over_F_cont_cd_err"]
 # The paper's range of alpha (docs/results/README.md, "Where it does not agree").
 PAPER_ALPHA = (0.7, 1.4)
 
@@ -41,12 +44,12 @@ PAPER_ALPHA = (0.7, 1.4)
 def friction_figure(pairs, title=None):
     """<F_crit>/<F_cont> and alpha by both methods against mu, one colour per N: each packing
     a marker (lp open, cd filled), the lines through the means over its seeds. pairs: dicts
-    with mu, N and the columns of REQUIRED and ALPHAS (NaN where absent)."""
+    with mu, N and the columns of REQUIRED and OPTIONAL (NaN where absent)."""
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(9.6, 4.0))
     sizes = sorted({p["N"] for p in pairs}, key=lambda n: (n is None, n or 0))
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    panels = ((axes[0], "F_crit_over_F_cont_{}", None, "<F_crit> / <F_cont>"),
+    panels = ((axes[0], "F_crit_over_F_cont_{}", "F_crit_over_F_cont_{}_err", "<F_crit> / <F_cont>"),
               (axes[1], "alpha_{}", "alpha_{}_err", "alpha  (d(r) ~ r^-alpha)"))
     for i, n in enumerate(sizes):
         group = [p for p in pairs if p["N"] == n and math.isfinite(p["mu"])]
@@ -82,11 +85,11 @@ def friction_figure(pairs, title=None):
 
 
 def read_table(path):
-    """The table's rows as dicts (REQUIRED and ALPHAS, NaN where absent or empty)."""
-    t = up.read_csv(path, REQUIRED, optional=ALPHAS, allow_nan=ALPHAS, min_rows=1)
+    """The table's rows as dicts (REQUIRED and OPTIONAL, NaN where absent or empty)."""
+    t = up.read_csv(path, REQUIRED, optional=OPTIONAL, allow_nan=OPTIONAL, min_rows=1)
     rows = []
     for i in range(len(t["mu"])):
-        row = {c: float(t[c][i]) if c in t else math.nan for c in REQUIRED + ALPHAS}
+        row = {c: float(t[c][i]) if c in t else math.nan for c in REQUIRED + OPTIONAL}
         if not (math.isfinite(row["mu"]) and row["mu"] >= 0):
             raise up.UserError(f"{path}: row {i + 1}: mu must be a finite number >= 0, got {row['mu']}")
         if not (math.isfinite(row["N"]) and row["N"] == int(row["N"]) and row["N"] > 0):

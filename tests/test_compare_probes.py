@@ -120,7 +120,20 @@ def expected(cd_dir, lp_dir):
     ratios = [float(cd[k]["f_crit"]) / float(lp[k]["f_crit"]) for k in sol
               if float(lp[k]["f_crit"]) > 0]
     q1, _, q3 = statistics.quantiles(ratios, n=4)
+
+    def err(x):
+        """The standard error of sum(x) / f_cont over the solved contacts: that of the mean
+        of x_k - R f_cont_k (which is 0), divided by the mean f_cont."""
+        r = sum(x.values()) / f_cont
+        e = [x[k] - r * float(cd[k]["f_cont"]) for k in sol]
+        return statistics.stdev(e) / math.sqrt(len(sol)) / (f_cont / len(sol))
+
+    x_cd = {k: float(cd[k]["f_crit"]) for k in sol}
+    x_lp = {k: float(lp[k]["f_crit"]) for k in sol}
     return {"probes": len(shared), "solved": len(sol),
+            "F_crit_over_F_cont_cd_err": err(x_cd), "F_crit_over_F_cont_lp_err": err(x_lp),
+            "F_crit_over_F_cont_lp_minus_cd": (sum(x_lp.values()) - sum(x_cd.values())) / f_cont,
+            "F_crit_over_F_cont_lp_minus_cd_err": err({k: x_lp[k] - x_cd[k] for k in sol}),
             "exact": sum(float(cd[k]["residual"]) <= 1e-6 for k in shared),
             "F_crit_over_F_cont_cd": sum(float(cd[k]["f_crit"]) for k in sol) / f_cont,
             "F_crit_over_F_cont_lp": sum(float(lp[k]["f_crit"]) for k in sol) / f_cont,
@@ -453,6 +466,37 @@ class ComparePairs(unittest.TestCase):
         p = run(lp1, cd1, "--out", R["out"])
         self.assertEqual(p.returncode, 1)
         self.assertEqual(contents(R["out"]), before)
+
+
+class RatioOfMeansError(unittest.TestCase):
+    """compare_probes.ratio_of_means_err by hand."""
+
+    @classmethod
+    def setUpClass(cls):
+        sys.path.insert(0, os.path.join(REPO, "scripts"))
+        import compare_probes
+        cls.f = staticmethod(compare_probes.ratio_of_means_err)
+
+    def test_with_equal_weights_it_is_the_standard_error_of_the_mean(self):
+        # x = 1, 2, 3 over y = 1: R = 2, e = -1, 0, 1, SE = sqrt(2 / 6) = 1 / sqrt(3).
+        self.assertAlmostEqual(self.f([1.0, 2.0, 3.0], [1.0, 1.0, 1.0]), 1.0 / math.sqrt(3.0), places=15)
+
+    def test_it_scales_with_x_and_is_zero_for_proportional_samples(self):
+        x, y = [1.0, 4.0, 2.5, 0.5], [2.0, 1.0, 3.0, 0.5]
+        self.assertAlmostEqual(self.f([3.0 * v for v in x], y), 3.0 * self.f(x, y), places=14)
+        self.assertAlmostEqual(self.f([1.7 * v for v in y], y), 0.0, places=15)
+        # y = 2, 1, 3, 0.5 (mean 1.625), R = 8 / 6.5: e = x - R y by hand.
+        r = 8.0 / 6.5
+        e = [1.0 - 2.0 * r, 4.0 - r, 2.5 - 3.0 * r, 0.5 - 0.5 * r]
+        self.assertAlmostEqual(self.f(x, y), math.sqrt(sum(v * v for v in e) / 12.0) / 1.625, places=15)
+
+    def test_below_two_samples_or_without_weight_there_is_none(self):
+        self.assertTrue(math.isnan(self.f([1.0], [1.0])))
+        self.assertTrue(math.isnan(self.f([1.0, 2.0], [0.0, 0.0])))
+
+
+if __name__ == "__main__":
+    unittest.main()
 
 
 if __name__ == "__main__":

@@ -433,6 +433,20 @@ class PlotScriptsTest(unittest.TestCase):
         self.assertEqual(lines[(0, "cd, N = 1000")], ([0.1], [2.1]))
         self.assertNotIn((1, "lp, N = 1000"), lines)  # no alpha by lp at N = 1000: not drawn
 
+    def test_exact_sweep_draws_the_means_standard_errors(self):
+        """F_crit_over_F_cont_{lp,cd}_err, where given, are the error bars of panel (a)."""
+        path = os.path.join(self.tmp, "exact-probe-err.csv")
+        write_csv(path, ["mu", "N", "seed", "F_crit_over_F_cont_lp", "F_crit_over_F_cont_cd",
+                         "F_crit_over_F_cont_lp_err", "F_crit_over_F_cont_cd_err"],
+                  [(0, 500, 1, 1.0, 1.02, 0.01, 0.02), (0.1, 500, 1, 2.1, 2.0, "", 0.05)])
+        sys.path.insert(0, SCRIPTS)
+        import plot_exact_sweep
+        fig = plot_exact_sweep.friction_figure(plot_exact_sweep.read_table(path))
+        bars = [c for c in fig.axes[0].containers if c.has_yerr]
+        halves = sorted(tuple(round((seg[1][1] - seg[0][1]) / 2, 12) for seg in c[2][0].get_segments())
+                        for c in bars)
+        self.assertEqual(halves, [(0.01, 0.0), (0.02, 0.05)])  # lp (none at mu = 0.1), cd
+
     def test_exact_sweep_errors(self):
         missing = os.path.join(self.tmp, "no-such-exact.csv")
         self.assert_user_error(self.run_script("plot_exact_sweep.py", missing), missing, "not found")
