@@ -134,6 +134,16 @@ TEST_F(CliProbe, SampleProbesSeededForceCarryingContactsAndSummarisesThem) {
   // <F_crit>/<F_cont>: a ratio of the means over the probed contacts.
   EXPECT_NEAR(s["F_crit_over_F_cont"].get<double>(), sum_crit / sum_cont, 1e-12);
   EXPECT_NEAR(s["F_cont_over_F0"].get<double>(), sum_cont / 10 / F0, 1e-12);
+  {  // its standard error over the 10 contacts (the delta method, docs/probe.md "Campaigns")
+    const double R = s["F_crit_over_F_cont"].get<double>();
+    double e2 = 0.0;
+    for (std::size_t i = 0; i < probes.rows(); ++i) {
+      const double e = probes.number(i, probes.column("f_crit")) - R * probes.number(i, probes.column("f_cont"));
+      e2 += e * e;
+    }
+    EXPECT_NEAR(s["F_crit_over_F_cont_err"].get<double>(), std::sqrt(e2 / 90.0) / (sum_cont / 10), 1e-12);
+    EXPECT_GT(s["F_crit_over_F_cont_err"].get<double>(), 0.0);
+  }
   EXPECT_NE(s["command"].get<std::string>().find("--sample 10"), std::string::npos);
   for (const char* f : {"response_field.csv", "response_profile.csv"})
     EXPECT_GT(CsvTable::read(out / f).rows(), 0u) << f;

@@ -647,7 +647,20 @@ TEST(ProbeCampaign, SummaryLeavesProbesWithoutASolutionOutOfTheMeans) {
   EXPECT_EQ(sum.without_solution, 1);
   EXPECT_DOUBLE_EQ(sum.F_crit_over_F_cont, (3.0 + 1.5) / (2.0 + 1.0));
   EXPECT_DOUBLE_EQ(sum.F_cont_over_F0, 1.5 / p.force_unit());
+  // Its standard error over the two probes in the means, by hand: R = 1.5, e = 3 - 1.5 x 2 = 0
+  // and 1.5 - 1.5 x 1 = 0: the two are proportional, SE 0. With contact 1 at 2.5 instead:
+  // R = 5.5 / 3, e = 3 - 11 / 3 = -2 / 3 and 2.5 - 5.5 / 3 = 2 / 3, SE = sqrt(8 / 9 / 2) / 1.5.
+  EXPECT_EQ(sum.F_crit_over_F_cont_err, 0.0);
+  {
+    CampaignState other = st;
+    other.rows[1].f_crit = 2.5;
+    EXPECT_NEAR(summarize(p, other).F_crit_over_F_cont_err, std::sqrt(8.0 / 9.0 / 2.0) / 1.5, 1e-15);
+    other.rows.resize(1);  // one probe in the means: no error
+    EXPECT_TRUE(std::isnan(summarize(p, other).F_crit_over_F_cont_err));
+    EXPECT_FALSE(campaign_summary_json(p, PackingStats{}, summarize(p, other)).contains("F_crit_over_F_cont_err"));
+  }
   const nlohmann::json j = campaign_summary_json(p, PackingStats{}, sum);
+  EXPECT_EQ(j.at("F_crit_over_F_cont_err").get<double>(), 0.0);
   EXPECT_EQ(j.at("not_converged").get<int>(), 2);
   EXPECT_EQ(j.at("without_solution").get<int>(), 1);
   EXPECT_EQ(sum.inertia_probes, 0);  // rows without f_inertia (NaN): no inertia in the summary

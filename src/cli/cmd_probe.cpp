@@ -471,7 +471,9 @@ void print_campaign_report(const ProbeOptions& o, const Packing& p, const Campai
                 format_duration(time.wall).c_str(), out.c_str());
   std::printf("  N %zu  mu %g  phi %.4f  z %.3f  <F_cont>/F0 %.4f\n", p.size(), p.meta.contact.mu, stats.phi,
               stats.z, sum.F_cont_over_F0);
-  std::printf("  <F_crit>/<F_cont> %.4f   not converged: %d", sum.F_crit_over_F_cont, sum.not_converged);
+  std::printf("  <F_crit>/<F_cont> %.4f", sum.F_crit_over_F_cont);
+  if (std::isfinite(sum.F_crit_over_F_cont_err)) std::printf(" +- %.4f", sum.F_crit_over_F_cont_err);
+  std::printf("   not converged: %d", sum.not_converged);
   if (sum.without_solution > 0)
     std::printf(" (%d without a solution, left out of the means)", sum.without_solution);
   std::printf("\n");

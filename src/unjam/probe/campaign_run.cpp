@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "unjam/core/atomic_file.hpp"
 
@@ -84,6 +85,7 @@ nlohmann::json campaign_summary_json(const Packing& p, const PackingStats& stats
       {"F_cont_over_F0", sum.F_cont_over_F0},
       {"F_crit_over_F_cont", sum.F_crit_over_F_cont},
   };
+  if (std::isfinite(sum.F_crit_over_F_cont_err)) j["F_crit_over_F_cont_err"] = sum.F_crit_over_F_cont_err;
   if (sum.inertia_probes > 0)
     j["f_inertia_over_F0"] = {{"probes", sum.inertia_probes},
                               {"median", sum.f_inertia_median_over_F0},

@@ -409,6 +409,15 @@ CampaignSummary summarize(const Packing& p, const CampaignState& state, std::opt
     sum.F_cont_over_F0 = f_cont / solved / p.force_unit();
     sum.F_crit_over_F_cont = f_crit / f_cont;
   }
+  if (solved > 1 && f_cont > 0.0) {
+    double e2 = 0.0;  // over the rows in contact order: the same bits for any thread count
+    for (const ProbeRow& r : state.rows) {
+      if (!enters_averages(r, max_inertia, p.force_unit())) continue;
+      const double e = r.f_crit - sum.F_crit_over_F_cont * r.f_cont;
+      e2 += e * e;
+    }
+    sum.F_crit_over_F_cont_err = std::sqrt(e2 / (double(solved) * (solved - 1))) / (f_cont / solved);
+  }
   std::vector<double> inertia;
   for (const ProbeRow& r : state.rows) {
     if (std::isnan(r.f_inertia)) continue;

@@ -131,6 +131,12 @@ struct CampaignSummary {
   int inertial = 0;                  // solved, left out for f_inertia > max_inertia F0
   double F_cont_over_F0 = 0.0;       // <F_cont> / F0 over the probes that enter the averages
   double F_crit_over_F_cont = 0.0;   // <F_crit> / <F_cont>
+  // Its standard error over the sampled contacts (n >= 2 probes in the averages; NaN below):
+  // the delta method for a ratio of means, R = sum f_crit / sum f_cont,
+  //   SE = sqrt(sum e^2 / (n (n - 1))) / (sum f_cont / n),  e = f_crit - R f_cont
+  // (docs/probe.md, "Campaigns"). Another sample of contacts of the same packing; another
+  // packing may differ by more.
+  double F_crit_over_F_cont_err = std::numeric_limits<double>::quiet_NaN();
   // ProbeRow::f_inertia / F0 over the probes that have it (none for lp): how many, the
   // median, the largest and its contact (-1 if none).
   int inertia_probes = 0;
