@@ -126,6 +126,16 @@ START_WORDS = {
 }
 
 
+def sampling_error(group, method):
+    """sqrt(sum SE_i^2) / n over the packings of a group: the standard error of their mean
+    <F_crit>/<F_cont> by `method` from the sampling of the contacts; "—" unless every packing
+    has its SE (F_crit_over_F_cont_<method>_err)."""
+    errs = [r.get(f"F_crit_over_F_cont_{method}_err") or "" for r in group]
+    if not errs or "" in errs:
+        return "—"
+    return f"{math.sqrt(sum(float(e) ** 2 for e in errs)) / len(errs):.4f}"
+
+
 def exact_probe_section(path, start):
     """Report lines comparing the exact probe (cd, from `start`) with lp on the same contacts,
     from OUT/exact-probe.csv (none when the table does not exist)."""
@@ -141,23 +151,28 @@ def exact_probe_section(path, start):
          + START_WORDS[start] +
          "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
          "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
+         "'sampling error': the standard error of the seeds' mean from the sampling of the "
+         "contacts alone, sqrt(sum SE_i^2) / seeds over each packing's own SE_i "
+         "(`F_crit_over_F_cont_err` of its summary; docs/probe.md, \"Campaigns\"), lp / cd; the "
+         "spread between packings may be larger. "
          "'not exact': residual above 1e-6 g; 'without a solution': above 1e-3 g, left out of "
          "the cd means (the near-exact ones are kept); 'stopped by the budget': cd probes stopped "
          "by `--cd-max-pieces`, which are the hardest ones, so the cd means are those of the "
          "probes solved within it; 'near-exact, accepted': cd probes whose search stopped at their "
          "first solution within `--cd-accept-residual` (counted among the not exact).", "",
          "| mu | N | seeds | probes | not exact | without a solution | <F_crit>/<F_cont> lp | "
-         "<F_crit>/<F_cont> cd | alpha lp | alpha cd | CPU s per cd probe | stopped by the budget | "
-         "near-exact, accepted |",
-         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+         "<F_crit>/<F_cont> cd | sampling error lp / cd | alpha lp | alpha cd | CPU s per cd probe | "
+         "stopped by the budget | near-exact, accepted |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (mu, n), g in sorted(groups.items()):
         probes = sum(int(r["probes"]) for r in g)
         bad = sum(int(r["not_exact"]) for r in g)
         none = sum(int(r["without_solution"]) for r in g)
         L.append(f"| {fmt_mu(mu)} | {n} | {len(g)} | {probes} | {bad} | {none} | "
                  + " | ".join(pm(mean(g, c)) for c in ("F_crit_over_F_cont_lp",
-                                                       "F_crit_over_F_cont_cd", "alpha_lp",
-                                                       "alpha_cd"))
+                                                       "F_crit_over_F_cont_cd"))
+                 + f" | {sampling_error(g, 'lp')} / {sampling_error(g, 'cd')} | "
+                 + " | ".join(pm(mean(g, c)) for c in ("alpha_lp", "alpha_cd"))
                  + f" | {mean(g, 'cpu_s_per_probe_cd')[0]:.2f} | "
                  + f"{sum(int(r.get('over_budget') or 0) for r in g)} | "
                  + f"{sum(int(r.get('accepted') or 0) for r in g)} |")

@@ -62,11 +62,13 @@ SCALES = {
 # ones are kept); alpha empty where the fit failed; over_budget: cd probes stopped by the
 # budget of pieces (cd_max_pieces; 0 without one), with or without a solution; accepted: cd
 # probes whose search stopped at a near-exact solution within cd_accept_residual (0 without
-# one; they are among not_exact).
+# one; they are among not_exact). F_crit_over_F_cont_{lp,cd}_err: the means' standard errors
+# over the sampled contacts (probe_summary.json's F_crit_over_F_cont_err; empty in a summary
+# without it).
 EXACT_COLUMNS = ["mu", "N", "seed", "probes", "not_exact", "without_solution",
                  "F_crit_over_F_cont_lp",
                  "F_crit_over_F_cont_cd", "alpha_lp", "alpha_cd", "cpu_s_per_probe_cd",
-                 "over_budget", "accepted"]
+                 "over_budget", "accepted", "F_crit_over_F_cont_lp_err", "F_crit_over_F_cont_cd_err"]
 FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # mu = 0 packings get tighter dynamics: their network must be unique (isostatic) for
 # F_crit = F_cont. The default (NLGS tolerance 1e-4, 200 sweeps a step) leaves overlaps of
@@ -201,7 +203,9 @@ def exact_row(d, mu, n, seed):
             "alpha_lp": alpha_text(s["lp"]), "alpha_cd": alpha_text(s["cd"]),
             "cpu_s_per_probe_cd": repr(cpu_per_probe(s["cd"], max(1, s["cd"]["probes"]))),
             "over_budget": s["cd"].get("over_budget", {}).get("probes", 0),
-            "accepted": s["cd"].get("accepted", {}).get("probes", 0)}
+            "accepted": s["cd"].get("accepted", {}).get("probes", 0),
+            **{f"F_crit_over_F_cont_{m}_err": repr(float(s[m]["F_crit_over_F_cont_err"]))
+               if "F_crit_over_F_cont_err" in s[m] else "" for m in ("lp", "cd")}}
 
 
 def plot_stage(R, name, outputs, cmds, deps):

@@ -362,6 +362,8 @@ class ExactProbeTable(unittest.TestCase):
                         s["over_budget"] = {"max_pieces": 100, "probes": 2}
                     if m == "cd" and seed == 1:  # 4 accepted near-exact (without the option: 0)
                         s["accepted"] = {"accept_residual": 1e-5, "probes": 4}
+                    # the means' standard errors over the contacts: lp 0.02 on both, cd 0.03, 0.04
+                    s["F_crit_over_F_cont_err"] = 0.02 if m == "lp" else 0.01 + 0.01 * (seed + 1)
                     with open(os.path.join(o, "probe_summary.json"), "w") as f:
                         json.dump(s, f)
                 rows.append(experiment_stages.exact_row(d, 0.5, 500, seed))
@@ -374,8 +376,19 @@ class ExactProbeTable(unittest.TestCase):
                 w.writerows(rows)
             report = "\n".join(experiment_report.exact_probe_section(table, "compliant"))
             self.assertIn("| without a solution |", report)
-            self.assertIn("| 0.5 | 500 | 2 | 600 | 8 | 3 | 2.0000 ± 0.0000 | 1.5000 ± 0.0000 |",
-                          report)
+            self.assertEqual([(r["F_crit_over_F_cont_lp_err"], r["F_crit_over_F_cont_cd_err"]) for r in rows],
+                             [("0.02", "0.03"), ("0.02", "0.04")])
+            # sampling error of the two seeds' mean: sqrt(2 x 0.02^2) / 2 and sqrt(0.03^2 + 0.04^2) / 2
+            self.assertIn("| 0.5 | 500 | 2 | 600 | 8 | 3 | 2.0000 ± 0.0000 | 1.5000 ± 0.0000 | "
+                          "0.0141 / 0.0250 |", report)
+            # a summary without it (made before it was recorded): no sampling error for the group
+            rows[1]["F_crit_over_F_cont_cd_err"] = ""
+            with open(table, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
+                w.writeheader()
+                w.writerows(rows)
+            report = "\n".join(experiment_report.exact_probe_section(table, "compliant"))
+            self.assertIn("| 1.5000 ± 0.0000 | 0.0141 / — |", report)
             self.assertTrue(any(line.startswith("| 0.5 | 500 |") and line.endswith("| 2 | 4 |")
                                 for line in report.splitlines()), report)
 
