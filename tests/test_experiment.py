@@ -370,11 +370,15 @@ class ExactProbeTable(unittest.TestCase):
             self.assertEqual([(r["not_exact"], r["without_solution"], r["over_budget"],
                                r["accepted"]) for r in rows], [(5, 2, 0, 4), (3, 1, 2, 0)])
             table = os.path.join(tmp, "exact-probe.csv")
-            with open(table, "w", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
-                w.writeheader()
-                w.writerows(rows)
-            report = "\n".join(experiment_report.exact_probe_section(table, "compliant"))
+
+            def report_of(rows):
+                """The report section of exact-probe.csv written with these rows."""
+                with open(table, "w", newline="") as f:
+                    w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
+                    w.writeheader()
+                    w.writerows(rows)
+                return "\n".join(experiment_report.exact_probe_section(table, "compliant"))
+            report = report_of(rows)
             self.assertIn("| without a solution |", report)
             self.assertEqual([(r["F_crit_over_F_cont_lp_err"], r["F_crit_over_F_cont_cd_err"]) for r in rows],
                              [("0.02", "0.03"), ("0.02", "0.04")])
@@ -383,12 +387,7 @@ class ExactProbeTable(unittest.TestCase):
                           "0.0141 / 0.0250 |", report)
             # a summary without it (made before it was recorded): no sampling error for the group
             rows[1]["F_crit_over_F_cont_cd_err"] = ""
-            with open(table, "w", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=experiment_stages.EXACT_COLUMNS)
-                w.writeheader()
-                w.writerows(rows)
-            report = "\n".join(experiment_report.exact_probe_section(table, "compliant"))
-            self.assertIn("| 1.5000 ± 0.0000 | 0.0141 / — |", report)
+            self.assertIn("| 1.5000 ± 0.0000 | 0.0141 / — |", report_of(rows))
             self.assertTrue(any(line.startswith("| 0.5 | 500 |") and line.endswith("| 2 | 4 |")
                                 for line in report.splitlines()), report)
 
