@@ -281,8 +281,7 @@ def compare_pair(cd, lp, label):
     packing = {"packing": s_cd["packing"], "mu": _optional_number(cd, "mu"),
                "N": s_cd.get("N"), "seed": s_cd.get("seed")}
     rows, ratios, no_lp, inertia = [], [], [], []
-    taken = []  # (f_cont, f_crit cd, f_crit lp) of the contacts the means take
-    sum_cont = sum_cd = sum_lp = 0.0
+    cont, crit_cd, crit_lp = [], [], []  # f_cont and both F_crit of the contacts the means take
     # The same sums over every shared contact (lp only) and over the exact ones.
     all_cont = all_lp = exact_cont = exact_cd = exact_lp = 0.0
     n_exact = n_solved = n_inertial = 0
@@ -311,10 +310,9 @@ def compare_pair(cd, lp, label):
         if inertial:
             n_inertial += 1
         elif solved:
-            sum_cont += r["f_cont"]
-            sum_cd += r["f_crit"]
-            sum_lp += q["f_crit"]
-            taken.append((r["f_cont"], r["f_crit"], q["f_crit"]))
+            cont.append(r["f_cont"])
+            crit_cd.append(r["f_crit"])
+            crit_lp.append(q["f_crit"])
             if q["f_crit"] > 0:
                 ratios.append(ratio)
             else:
@@ -344,6 +342,7 @@ def compare_pair(cd, lp, label):
         q1, _, q3 = statistics.quantiles(ratios, n=4)
     else:
         q1 = q3 = ratios[0] if ratios else math.nan
+    sum_cont, sum_cd, sum_lp = sum(cont), sum(crit_cd), sum(crit_lp)
     largest = max(inertia) if inertia else (math.nan, None)  # (f_inertia / F0, contact)
     probes_cd = s_cd.get("probes")
     if not isinstance(probes_cd, int) or isinstance(probes_cd, bool) or probes_cd <= 0:
@@ -370,11 +369,10 @@ def compare_pair(cd, lp, label):
         "F_crit_over_F_cont_lp_all": all_lp / all_cont if all_cont > 0 else math.nan,
         "F_crit_over_F_cont_lp_exact": exact_lp / exact_cont if exact_cont > 0 else math.nan,
         "F_crit_over_F_cont_cd_exact": exact_cd / exact_cont if exact_cont > 0 else math.nan,
-        "F_crit_over_F_cont_lp_err": ratio_of_means_err([t[2] for t in taken], [t[0] for t in taken]),
-        "F_crit_over_F_cont_cd_err": ratio_of_means_err([t[1] for t in taken], [t[0] for t in taken]),
+        "F_crit_over_F_cont_lp_err": ratio_of_means_err(crit_lp, cont),
+        "F_crit_over_F_cont_cd_err": ratio_of_means_err(crit_cd, cont),
         "F_crit_over_F_cont_lp_minus_cd": (sum_lp - sum_cd) / sum_cont if sum_cont > 0 else math.nan,
-        "F_crit_over_F_cont_lp_minus_cd_err": ratio_of_means_err([t[2] - t[1] for t in taken],
-                                                                 [t[0] for t in taken]),
+        "F_crit_over_F_cont_lp_minus_cd_err": ratio_of_means_err([a - b for a, b in zip(crit_lp, crit_cd)], cont),
     }
     return numbers, rows, ratios
 

@@ -8,13 +8,14 @@ TABLE.csv has one row per packing with the columns
     mu,N,seed,F_crit_over_F_cont_lp,F_crit_over_F_cont_cd
 and optionally F_crit_over_F_cont_lp_err, F_crit_over_F_cont_cd_err (the standard errors of the
 means over the sampled contacts, compare_probes.py), alpha_lp, alpha_cd (empty or 'nan' where
-the fit failed) and alpha_lp_err, alpha_cd_err (other columns are ignored): the experiment's exact-probe.csv
-(scripts/experiment.py --cd-sample K), compare.csv of scripts/compare_probes.py, or
-docs/results/exact/summary.csv.
+the fit failed) and alpha_lp_err, alpha_cd_err (other columns are ignored): the experiment's
+exact-probe.csv (scripts/experiment.py --cd-sample K), compare.csv of
+scripts/compare_probes.py, or docs/results/exact/summary.csv.
 
   (a) <F_crit>/<F_cont> by lp (open squares, dashed line) and by cd (filled circles, solid
       line), one colour per N, a marker per packing (error bars: the means' standard errors,
-      where the table has them) and the lines through the means over its seeds; the line at 1 is the paper's value at both ends of the mu range;
+      where the table has them) and the lines through the means over its seeds; the line at
+      1 is the paper's value at both ends of the mu range;
   (b) alpha the same way (error bars: the fits' own, where the table has them); the band is
       the paper's range 0.7-1.4.
 mu spans 0 ... 1, so the mu axis is symlog, linear below 0.01 (mu = 0 on the axis).
