@@ -385,6 +385,22 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   unjam::write_file_atomic(file, "{\"settings\": ");
   refused(settings, "not a bounds checkpoint");
   fs::remove(file);
+  // A place it cannot write is refused when the checkpoint is made, before any LP: under a
+  // regular file, and a directory in the file's place.
+  const fs::path blocker = fs::temp_directory_path() / "unjam_test_bounds_checkpoint_blocker";
+  fs::remove_all(blocker);
+  unjam::write_file_atomic(blocker, "a file");
+  for (const auto& [place, why] : {std::pair{blocker / "cp.json", std::string("cannot create directory")},
+                                   std::pair{fs::temp_directory_path(), std::string("is a directory")}}) {
+    try {
+      unjam::BoundsCheckpoint c(place, settings);
+      ADD_FAILURE() << place << " accepted";
+    } catch (const unjam::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(unjam::read_file(blocker), "a file");
+  fs::remove(blocker);
 }
 
 TEST(ForceBounds, CommandWritesCsvAndJson) {

@@ -47,6 +47,7 @@ long long known_values(const ForceBounds& b) {
 
 BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
     : file_(std::move(file)), settings_(std::move(settings)) {
+  require_writable(file_);  // before any LP, not at the first save
   if (!std::filesystem::exists(file_)) return;
   const std::string name = file_.string();
   const auto j = nlohmann::json::parse(read_file(file_), nullptr, false);

@@ -31,7 +31,8 @@ nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const
 // The values known in a partial result: the finite entries of fn_min and fn_max.
 long long known_values(const ForceBounds& b);
 
-// A checkpoint file and the run it belongs to. Constructing it reads the file if there is one:
+// A checkpoint file and the run it belongs to. Constructing it checks that the file can be
+// written (unjam::Error if not, before any LP is solved) and reads the file if there is one:
 // a checkpoint of other settings is refused (unjam::Error naming the settings that differ,
 // core/checkpoint_settings), as is one that is not valid JSON or whose values do not fit the
 // settings' number of contacts.

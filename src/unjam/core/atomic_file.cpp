@@ -49,6 +49,21 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
   }
 }
 
+void require_writable(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error("cannot write " + path.string() + ": it is a directory");
+  if (path.has_parent_path()) {
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) throw Error("cannot create directory " + path.parent_path().string() + ": " + ec.message());
+  }
+  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error("cannot write " + tmp.string() + ": " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(tmp.c_str());
+}
+
 void rename_file(const std::filesystem::path& from, const std::filesystem::path& to) {
   if (::rename(from.c_str(), to.c_str()) != 0)
     throw Error("cannot rename " + from.string() + " to " + to.string() + ": " + std::strerror(errno));

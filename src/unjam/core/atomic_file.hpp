@@ -11,6 +11,11 @@ namespace unjam {
 // Writes `content` to `path` atomically; throws unjam::Error on failure.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+// Throws unjam::Error (naming the place and the reason) unless a file can be written at `path`
+// by write_file_atomic: creates its directory, creates and removes the temporary file beside
+// it. For runs that write their first file only after minutes of work.
+void require_writable(const std::filesystem::path& path);
+
 // Renames `from` to `to` (replacing it atomically); throws unjam::Error on failure.
 void rename_file(const std::filesystem::path& from, const std::filesystem::path& to);
 
