@@ -161,10 +161,20 @@ def test_bounds_resume_a_stopped_runs_checkpoint_bit_for_bit(tmp_path, p50):
     # A checkpoint file that is not there yet: a run from scratch, nothing left behind.
     b = unjam.bounds(p50, threads=1, checkpoint=checkpoint)
     assert [float(x["fn_max"]) for x in whole] == b["fn_max"].tolist() and not checkpoint.exists()
-    # A checkpoint it could not write is refused at once, not at its first save.
+    # A checkpoint it could not write is refused at once, not at its first save; so is a packing
+    # directory that pack and relax could not write (before the compaction).
     (tmp_path / "a-file").write_text("kept")
     with pytest.raises(unjam.Error, match="cannot create directory"):
         unjam.bounds(p50, checkpoint=tmp_path / "a-file" / "checkpoint.json")
+    steps = []
+    def compaction_started(progress):  # called every 2 s of the compaction; stops it
+        steps.append(progress["step"])
+        raise KeyboardInterrupt
+    with pytest.raises(unjam.Error, match="cannot create directory"):
+        unjam.pack(n=8000, seed=1, out=tmp_path / "a-file" / "p", progress=compaction_started)
+    assert steps == [], "refused only after the compaction had begun"
+    with pytest.raises(unjam.Error, match="cannot create directory"):
+        unjam.relax(p50, mu=0.5, out=tmp_path / "a-file" / "p")
     assert (tmp_path / "a-file").read_text() == "kept"
 
 

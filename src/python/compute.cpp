@@ -74,6 +74,7 @@ std::string call_record(bool from_gas, const PackArgs& a) {
 // `unjam pack --resume OUT`). An exception of the progress callback stops the compaction and
 // is raised.
 Packing run_compaction(Packing p, const PackArgs& a) {
+  if (a.out) require_writable(*a.out / "meta.json");  // before the compaction, not at its first checkpoint
   SignalPoll poll;
   CompactionResult r;
   std::optional<py::error_already_set> callback_error;
