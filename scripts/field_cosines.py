@@ -284,7 +284,10 @@ def main(argv):
     table_of_campaign = campaign_rows(a)
     ks = listed_contacts(a, table_of_campaign)
     from_campaign = campaign_settings(a, unjam, p)
-    os.makedirs(a.out, exist_ok=True)
+    try:
+        os.makedirs(os.path.join(a.out, "fields"), exist_ok=True)
+    except OSError as e:
+        sys.exit(f"field_cosines: cannot create the output directory {a.out}: {e.strerror or e}")
     table = os.path.join(a.out, "fields.csv")
     window = None  # the cd probes' window (mean diameters; None: the whole packing)
     if from_campaign is not None:
@@ -308,7 +311,6 @@ def main(argv):
     if window is not None:
         settings["window"] = window
     cd_settings = unjam.CdSettings(**cd_fields)  # range-checked as unjam probe checks its options
-    os.makedirs(os.path.join(a.out, "fields"), exist_ok=True)
     rows = read_done(a, ks, settings)
     write_json(os.path.join(a.out, "settings.json"), settings)
     order = {k: i for i, k in enumerate(ks)}

@@ -74,6 +74,10 @@ def parse(argv):
     if not (os.path.isfile(a.unjam) and os.access(a.unjam, os.X_OK)):
         ap.error(f"{a.unjam} is not an executable (build it: cmake --build build/release -j2)")
     a.out = a.out or a.packing.rstrip("/") + "-solutions"
+    try:
+        os.makedirs(a.out, exist_ok=True)
+    except OSError as e:
+        ap.error(f"cannot create the output directory {a.out}: {e.strerror or e}")
     return a
 
 

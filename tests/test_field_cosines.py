@@ -238,3 +238,5 @@ def test_bad_input_is_refused(tmp_path):
     r = run(P50, "--contacts", 0, "--out", tmp_path / "t", ok=False)
     assert r.returncode == 1 and "not this script's table" in r.stderr
     assert (tmp_path / "t" / "fields.csv").read_text() == "contact,f_crit\n0,1\n"
+    r = run(P50, "--contacts", 0, "--out", tmp_path / "t" / "fields.csv" / "x", ok=False)
+    assert r.returncode == 1 and "cannot create the output directory" in r.stderr and "Traceback" not in r.stderr

@@ -114,13 +114,20 @@ class ProbeSolutions(unittest.TestCase):
             self.assertEqual(f.read(), before)
 
     def test_4_bad_input_is_refused(self):
+        a_file = os.path.join(R['tmp'], "a-file")
+        with open(a_file, "w") as f:
+            f.write("kept")
         for args, message in (([R['tmp'], "--all"], "not a packing directory"),
+                              ([R['packing'], "--all", "--out", os.path.join(a_file, "x"), "--unjam", UNJAM],
+                               "cannot create the output directory"),
                               ([R['packing'], "--sample", "0", "--unjam", UNJAM], "--sample must be at least 1"),
                               ([R['packing'], "--all", "--starts", "static", "static", "--unjam", UNJAM],
                                "lists a start twice")):
             p = run(*args)
             self.assertEqual(p.returncode, 2, args)
             self.assertIn(message, p.stderr)
+        with open(a_file) as f:
+            self.assertEqual(f.read(), "kept")
 
 
 if __name__ == "__main__":
