@@ -161,8 +161,11 @@ def test_bounds_resume_a_stopped_runs_checkpoint_bit_for_bit(tmp_path, p50):
     # A checkpoint file that is not there yet: a run from scratch, nothing left behind.
     b = unjam.bounds(p50, threads=1, checkpoint=checkpoint)
     assert [float(x["fn_max"]) for x in whole] == b["fn_max"].tolist() and not checkpoint.exists()
-    # A checkpoint it could not write is refused at once, not at its first save; so is a packing
-    # directory that pack and relax could not write (before the compaction).
+
+
+def test_places_that_cannot_be_written_are_refused_before_the_work(tmp_path, p50):
+    """A bounds checkpoint that cannot be written is refused at once, not at its first save; a
+    packing directory that pack and relax cannot write, before the compaction."""
     (tmp_path / "a-file").write_text("kept")
     with pytest.raises(unjam.Error, match="cannot create directory"):
         unjam.bounds(p50, checkpoint=tmp_path / "a-file" / "checkpoint.json")

@@ -18,6 +18,7 @@
 #include "unjam/campaign/bounds_checkpoint.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/work_source.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -74,7 +75,10 @@ std::string call_record(bool from_gas, const PackArgs& a) {
 // `unjam pack --resume OUT`). An exception of the progress callback stops the compaction and
 // is raised.
 Packing run_compaction(Packing p, const PackArgs& a) {
-  if (a.out) require_writable(*a.out / "meta.json");  // before the compaction, not at its first checkpoint
+  // As `unjam pack`: the output directory made and locked before the compaction (one writer;
+  // a place that cannot be written is refused now, not at the first checkpoint).
+  std::optional<DirLock> lock;
+  if (a.out) lock.emplace(*a.out, p.meta.command);
   SignalPoll poll;
   CompactionResult r;
   std::optional<py::error_already_set> callback_error;

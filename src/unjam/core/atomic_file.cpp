@@ -16,16 +16,28 @@
 
 namespace unjam {
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+namespace {
+
+// The temporary file beside `path` (NAME.tmp.PID), opened for writing after `path`'s directory
+// is made; throws unjam::Error naming what could not be made.
+int open_temporary(const std::filesystem::path& path, std::filesystem::path& tmp) {
   namespace fs = std::filesystem;
   if (path.has_parent_path()) {
     std::error_code ec;
     fs::create_directories(path.parent_path(), ec);
     if (ec) throw Error("cannot create directory " + path.parent_path().string() + ": " + ec.message());
   }
-  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
+  tmp = path.string() + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error("cannot write " + tmp.string() + ": " + std::strerror(errno));
+  return fd;
+}
+
+}  // namespace
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  std::filesystem::path tmp;
+  const int fd = open_temporary(path, tmp);
   std::size_t done = 0;
   while (done < content.size()) {
     const ssize_t w = ::write(fd, content.data() + done, content.size() - done);
@@ -50,17 +62,10 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 }
 
 void require_writable(const std::filesystem::path& path) {
-  namespace fs = std::filesystem;
   std::error_code ec;
-  if (fs::is_directory(path, ec)) throw Error("cannot write " + path.string() + ": it is a directory");
-  if (path.has_parent_path()) {
-    fs::create_directories(path.parent_path(), ec);
-    if (ec) throw Error("cannot create directory " + path.parent_path().string() + ": " + ec.message());
-  }
-  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw Error("cannot write " + tmp.string() + ": " + std::strerror(errno));
-  ::close(fd);
+  if (std::filesystem::is_directory(path, ec)) throw Error("cannot write " + path.string() + ": it is a directory");
+  std::filesystem::path tmp;
+  ::close(open_temporary(path, tmp));
   ::unlink(tmp.c_str());
 }
 

@@ -13,7 +13,8 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
 
 // Throws unjam::Error (naming the place and the reason) unless a file can be written at `path`
 // by write_file_atomic: creates its directory, creates and removes the temporary file beside
-// it. For runs that write their first file only after minutes of work.
+// it. For a run's single file written only after minutes of work (an output directory is
+// checked by taking its core/dir_lock).
 void require_writable(const std::filesystem::path& path);
 
 // Renames `from` to `to` (replacing it atomically); throws unjam::Error on failure.
