@@ -119,6 +119,47 @@ def test_probe_equals_tool_bit_for_bit(tmp_path, p50):
     assert all(np.array_equal(q.u, s.u) and np.array_equal(q.rot, s.rot) for q, s in zip(results, serial))
 
 
+def test_probe_reports_each_finished_probe(p50):
+    """progress= gets one dict per finished probe, with its ProbeResult: the same results as
+    the returned list, every position once, done counting up to the total."""
+    ks = [3, 17, 3, 40, 61, 8, 25]
+    for threads in (1, 2):
+        seen = []
+        results = unjam.probe(p50, contacts=ks, threads=threads, progress=seen.append)
+        assert [d["done"] for d in seen] == list(range(1, len(ks) + 1))
+        assert {d["total"] for d in seen} == {len(ks)}
+        assert sorted(d["index"] for d in seen) == list(range(len(ks)))
+        for d in seen:
+            assert d["contact"] == ks[d["index"]] == d["result"].contact
+            assert d["result"].f_crit == results[d["index"]].f_crit
+            assert np.array_equal(d["result"].u, results[d["index"]].u)
+            assert d["elapsed_s"] >= 0.0 and d["eta_s"] >= 0.0
+        assert seen[-1]["eta_s"] == 0.0
+        if threads == 1:  # one thread: in the order of the list
+            assert [d["index"] for d in seen] == list(range(len(ks)))
+    # One probe (contact=K) is reported too.
+    one = []
+    r = unjam.probe(p50, contact=5, progress=one.append)
+    assert len(one) == 1 and one[0]["result"].f_crit == r.f_crit and one[0]["total"] == 1
+
+
+def test_an_exception_of_the_probe_progress_stops_the_probes():
+    """The callback's exception is raised, and no probe is reported after it."""
+    p = unjam.read_packing(FIXTURE)
+    calls = []
+
+    def stop_at_third(d):
+        calls.append(d["done"])
+        if len(calls) == 3:
+            raise RuntimeError("enough")
+
+    with pytest.raises(RuntimeError, match="enough"):
+        unjam.probe(p, contacts=list(range(82)) * 20, threads=2, progress=stop_at_third)
+    assert calls == [1, 2, 3]
+    with pytest.raises(TypeError):
+        unjam.probe(p, contact=3, progress=42)
+
+
 def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
     tool("bounds", FIXTURE, "--threads", 1, "--out", tmp_path / "bounds.csv")
     b = unjam.bounds(p50, threads=1)
@@ -579,6 +620,25 @@ def test_ctrl_c_stops_a_long_call(setup, call):
         f"import unjam\n{setup}\nprint('ready', flush=True)\n{call}\nprint('done', flush=True)\n")
     assert seconds < 5.0 and rc != 0 and "done" not in out
     assert "KeyboardInterrupt" in err and "line 4" in err  # in the call
+
+
+def test_ctrl_c_of_a_probe_list_keeps_what_progress_was_given(tmp_path):
+    """Ctrl-C raises KeyboardInterrupt and returns nothing, but the probes handed to progress
+    before it are kept, and they are those of an uninterrupted run."""
+    seconds, rc, out, err = interrupted(
+        f"import unjam\np = unjam.read_packing({FIXTURE!r})\nkept = []\nprint('ready', flush=True)\n"
+        "try:\n    unjam.probe(p, contacts=list(range(82)) * 20, threads=2, progress=kept.append)\n"
+        "except KeyboardInterrupt:\n"
+        "    print(*(f\"{d['index']} {d['result'].f_crit!r}\" for d in kept), sep='\\n', flush=True)\n"
+        "    raise\n")
+    assert seconds < 5.0 and rc != 0 and "KeyboardInterrupt" in err
+    kept = [line.split() for line in out.splitlines()]
+    assert 0 < len(kept) < 82 * 20
+    p = unjam.read_packing(FIXTURE)
+    indices = [int(i) for i, _ in kept]
+    assert len(set(indices)) == len(indices)
+    again = unjam.probe(p, contacts=[i % 82 for i in indices], threads=1)
+    assert [float(f) for _, f in kept] == [r.f_crit for r in again]
 
 
 def test_ctrl_c_of_bounds_saves_its_checkpoint_and_the_resumed_run_loses_nothing(tmp_path):

@@ -3,8 +3,10 @@
 // defaults (taken from the library's settings structs where the tool takes them too).
 #include <omp.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -153,14 +155,16 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 
 // probe_contacts (in parallel; Ctrl-C checked between probes and, by the calling thread's
 // probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
-// in the order of contacts=[...].
+// in the order of contacts=[...]. progress gets each finished probe as it arrives, under the
+// GIL on the thread that gathers it; its first exception stops the probes (as Ctrl-C does) and
+// is raised.
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, std::optional<double> dt, double velocity_tol,
                  long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
                  double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
-                 std::optional<CdPathSettings> typed, int threads) {
+                 std::optional<CdPathSettings> typed, int threads, std::optional<py::function> progress) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd = cd_settings(cd_start, cd_compliant_start, cd_softer_starts, cd_max_pieces, cd_accept_residual,
@@ -174,12 +178,37 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
-  s.nlgs.cancel = [&poll] { return poll(); };
+  std::atomic<bool> callback_failed{false};
+  std::optional<py::error_already_set> callback_error;
+  s.nlgs.cancel = [&] { return callback_failed.load() || poll(); };
+  std::function<void(const FinishedProbe&)> report;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (progress)
+    report = [&](const FinishedProbe& f) {  // on the gathering thread, one call at a time
+      if (callback_failed) return;
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      py::gil_scoped_acquire gil;
+      try {
+        py::dict d;
+        d["index"] = f.index;
+        d["contact"] = list[f.index];
+        d["result"] = py::cast(*f.result);
+        d["done"] = f.done;
+        d["total"] = f.total;
+        d["elapsed_s"] = elapsed;
+        d["eta_s"] = elapsed / f.done * (f.total - f.done);
+        (*progress)(d);
+      } catch (py::error_already_set& e) {
+        callback_error = std::move(e);
+        callback_failed = true;
+      }
+    };
   {
     py::gil_scoped_release release;
     const ThreadCount count(threads);
-    results = probe_contacts(p, s, list, [&poll] { return poll(); });
+    results = probe_contacts(p, s, list, [&] { return callback_failed.load() || poll(); }, report);
   }
+  if (callback_error) throw std::move(*callback_error);
   poll.rethrow_if_interrupted();
   if (contact) return py::cast(std::move(results.front()));
   return py::cast(std::move(results));
@@ -390,7 +419,7 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood,
         py::arg("cd_compliant_start") = cd.cd.compliant_start,
         py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("cd") = py::none(),
-        py::arg("threads") = 0,
+        py::arg("threads") = 0, py::arg("progress") = py::none(),
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -412,7 +441,10 @@ void bind_compute(py::module_& m) {
         "a cd probe stops at a near-exact solution instead of searching on for an exact one, as `unjam probe "
         "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\"); cd: all of the cd method's "
         "settings as one unjam.CdSettings (its start included), instead of the cd_* keywords, which must then "
-        "be left at their defaults");
+        "be left at their defaults; progress: a callable given a dict (index: the position in contacts, "
+        "contact, result: its ProbeResult, done, total, elapsed_s, eta_s) once per finished probe, in the "
+        "order they finish (keep the results it is given: Ctrl-C raises KeyboardInterrupt and returns "
+        "nothing); an exception it raises stops the probes and is raised");
   m.def("campaign_settings", &campaign_settings, py::arg("packing"), py::arg("path"),
         "the settings of a campaign of `unjam probe --all` or `--sample K` on this packing, read from its "
         "probe_summary.json or probe_checkpoint.json (path): a dict with method, g, dt (None for lp), cd "

@@ -298,7 +298,7 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
 std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings& s,
                                         const std::vector<int>& contacts,
                                         const std::function<bool()>& should_stop,
-                                        const std::function<void(int, int)>& progress) {
+                                        const std::function<void(const FinishedProbe&)>& progress) {
   const int M = static_cast<int>(p.contacts.size());
   for (const int k : contacts)
     if (k < 0 || k >= M)
@@ -311,9 +311,11 @@ std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings
   loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, &contacts); };
   int finished = 0;
   loop.gather = [&](std::vector<TaskResult>& done) {
-    for (TaskResult& tr : done) results[tr.task] = decode(tr.bytes);
-    finished += static_cast<int>(done.size());
-    if (progress) progress(finished, static_cast<int>(contacts.size()));
+    for (TaskResult& tr : done) {
+      results[tr.task] = decode(tr.bytes);
+      ++finished;
+      if (progress) progress({tr.task, &*results[tr.task], finished, static_cast<int>(contacts.size())});
+    }
   };
   LocalDistributor local;
   local.run(tasks, loop);

@@ -197,13 +197,20 @@ ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settin
 // before every probe is handed out; settings.nlgs.cancel (may be empty, thread safe) is polled
 // there too and by the running probes, which it abandons. Once either returns true, the
 // results of the probes finished before the first one not finished (a prefix of `contacts`)
-// are returned. progress (may be empty) is called with (probes done, contacts.size()) as
-// results arrive, one call at a time. Throws unjam::Error for an index out of range, and the
-// first error of a probe (naming its contact).
+// are returned. progress (may be empty) is called once per finished probe, as results arrive
+// (in the order they finish, which depends on the thread count), one call at a time, from
+// whichever thread gathers it. Throws unjam::Error for an index out of range, and the first
+// error of a probe (naming its contact).
+struct FinishedProbe {
+  int index = 0;  // position in `contacts`
+  const ProbeResult* result = nullptr;
+  int done = 0;   // probes finished so far, this one included
+  int total = 0;  // contacts.size()
+};
 std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
                                         const std::vector<int>& contacts,
                                         const std::function<bool()>& should_stop = {},
-                                        const std::function<void(int, int)>& progress = {});
+                                        const std::function<void(const FinishedProbe&)>& progress = {});
 
 // The cd probes of `state` stopped by a budget of max_pieces pieces per probe
 // (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1), and those of them that
