@@ -4,7 +4,7 @@ Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
                      (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
                      [--cd-start static|compliant|interior] [--cd-max-pieces M]
                      [--cd-compliant-start C] [--g G] [--dt DT] [--threads T]
-                     [--chunk C] [--out DIR]
+                     [--out DIR]
 
 The lp probe (`--method lp`) takes F_crit as the LP maximum and its field from the LP
 optimum's active set; the paper's probe (`--method cd`) solves the contact-dynamics step
@@ -24,8 +24,8 @@ Outputs, in DIR (default PACKING-fields):
                at most 1e-6 g: unjam's own verdict), cosine, cosine_near, norm_ratio,
                f_inertia_cd (the cd step's largest net force on a grain, in the units of
                f_crit: docs/probe.md, "The inertia of the step"), in the order of the list.
-               Written after every chunk of --chunk contacts; a run stopped by Ctrl-C
-               resumes from it (the same command skips the contacts it already holds; a
+               Written after every probe (the cd probes run as one list on --threads
+               threads, unjam.probe(progress=...)); a run stopped by Ctrl-C resumes from it (the same command skips the contacts it already holds; a
                table of other contacts or other settings is refused, not overwritten).
   settings.json  the packing, --cd-start, --g, --dt and --near the table was made with
   fields/K.npz the two fields of contact K (arrays u_lp, u_cd (N, 2), rot_lp, rot_cd (N,);
@@ -112,7 +112,7 @@ def parse(argv):
     ap.add_argument("--near", type=float, default=5.0,
                     help="radius of the near field, in mean grain diameters (default 5)")
     ap.add_argument("--threads", type=int, default=0, help="threads (0: all cores)")
-    ap.add_argument("--chunk", type=int, default=8, help="contacts probed between saves (default 8)")
+    ap.add_argument("--chunk", type=int, default=8, help=argparse.SUPPRESS)  # the table is saved after every probe
     ap.add_argument("--out", help="output directory (default: PACKING-fields)")
     a = ap.parse_args(argv)
     if not os.path.isfile(os.path.join(a.packing, "meta.json")):
@@ -277,6 +277,25 @@ def plot(rows, path, title):
     plt.close(fig)
 
 
+def row(p, r_lp, r_cd, a):
+    """The fields.csv row of one contact probed by both methods (its fields saved in
+    a.out/fields where the cd step has a solution)."""
+    solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
+    near = near_grains(p, r_cd.contact, a.near)
+    if solved:
+        save_fields(os.path.join(a.out, "fields", f"{r_cd.contact}.npz"), r_lp, r_cd)
+    return {
+        "contact": str(r_cd.contact), "a": str(r_cd.a), "b": str(r_cd.b), "f_cont": repr(r_cd.f_cont),
+        "f_crit_lp": repr(r_lp.f_crit), "f_crit_cd": repr(r_cd.f_crit) if solved else "",
+        "residual_cd": repr(r_cd.residual) if solved else "",
+        "exact": "1" if r_cd.converged else "0",  # residual <= 1e-6 g (docs/probe.md)
+        "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
+        "cosine_near": repr(cosine(r_lp.u[near], r_cd.u[near])) if solved else "",
+        "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
+        if solved and np.linalg.norm(r_lp.u) > 0 else "",
+        "f_inertia_cd": repr(r_cd.f_inertia) if solved else ""}
+
+
 def main(argv):
     a = parse(argv)
     unjam = import_unjam()
@@ -319,30 +338,20 @@ def main(argv):
     if done:
         print(f"resuming: {len(done)} contacts already in {table}", flush=True)
     common = dict(g=a.g, threads=a.threads)
+
+    def finished(d):  # one cd probe done (unjam.probe's progress): its row, the table saved
+        r_cd = d["result"]
+        rows.append(row(p, lp[d["index"]], r_cd, a))
+        rows.sort(key=lambda r: order[int(r["contact"])])
+        write_table(table, rows, COLUMNS)
+        print(f"probes {len(rows)} / {len(ks)}, ETA {d['eta_s']:.0f} s", flush=True)
+
     try:
-        for i in range(0, len(todo), a.chunk):
-            chunk = todo[i:i + a.chunk]
-            lp = unjam.probe(p, contacts=chunk, method="lp", **common)
-            cd = unjam.probe(p, contacts=chunk, method="cd", cd=cd_settings, dt=a.dt, window=window,
-                              **common)
-            for r_lp, r_cd in zip(lp, cd):
-                solved = r_cd.residual < 1e300  # kNoSolution: no field to compare
-                near = near_grains(p, r_cd.contact, a.near)
-                if solved:
-                    save_fields(os.path.join(a.out, "fields", f"{r_cd.contact}.npz"), r_lp, r_cd)
-                rows.append({
-                    "contact": str(r_cd.contact), "a": str(r_cd.a), "b": str(r_cd.b), "f_cont": repr(r_cd.f_cont),
-                    "f_crit_lp": repr(r_lp.f_crit), "f_crit_cd": repr(r_cd.f_crit) if solved else "",
-                    "residual_cd": repr(r_cd.residual) if solved else "",
-                    "exact": "1" if r_cd.converged else "0",  # residual <= 1e-6 g (docs/probe.md)
-                    "cosine": repr(cosine(r_lp.u, r_cd.u)) if solved else "",
-                    "cosine_near": repr(cosine(r_lp.u[near], r_cd.u[near])) if solved else "",
-                    "norm_ratio": repr(float(np.linalg.norm(r_cd.u) / np.linalg.norm(r_lp.u)))
-                    if solved and np.linalg.norm(r_lp.u) > 0 else "",
-                    "f_inertia_cd": repr(r_cd.f_inertia) if solved else ""})
-            rows.sort(key=lambda r: order[int(r["contact"])])
-            write_table(table, rows, COLUMNS)
-            print(f"probes {len(rows)} / {len(ks)}", flush=True)
+        # The lp probes first (short), then the cd probes in one call, each saved as it ends.
+        lp = unjam.probe(p, contacts=todo, method="lp", **common) if todo else []
+        if todo:
+            unjam.probe(p, contacts=todo, method="cd", cd=cd_settings, dt=a.dt, window=window,
+                        progress=finished, **common)
     except KeyboardInterrupt:
         write_table(table, rows, COLUMNS)
         print(f"interrupted: {len(rows)} of {len(ks)} contacts saved in {table}; "

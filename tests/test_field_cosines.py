@@ -7,6 +7,7 @@ by hand: PYTHONPATH=build/release/python UNJAM=build/release/unjam \
 import csv
 import json
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -51,7 +52,7 @@ def write_rows(out, table):
 
 def test_each_row_is_the_two_probes_and_their_fields_cosine(tmp_path):
     ks = [0, 1, 2, 3, 5, 8]
-    run(P50, "--contacts", *ks, "--threads", 1, "--chunk", 4, "--near", 1.5, "--out", tmp_path)
+    run(P50, "--contacts", *ks, "--threads", 1, "--near", 1.5, "--out", tmp_path)
     p = unjam.read_packing(P50)
     lp = unjam.probe(p, contacts=ks, method="lp")
     cd = unjam.probe(p, contacts=ks, method="cd", cd_start="compliant")
@@ -139,6 +140,26 @@ def test_a_second_run_keeps_what_is_done_and_probes_the_rest(tmp_path):
     r = run(P50, "--contacts", 2, 0, 1, "--cd-start", "static", "--out", tmp_path, ok=False)
     assert r.returncode == 1 and "other settings" in r.stderr
     assert (tmp_path / "fields.csv").read_text() == before
+
+
+def test_ctrl_c_keeps_every_probe_finished_before_it(tmp_path):
+    """The cd probes run as one list and each is saved as it ends: a Ctrl-C after the first
+    exits 3 with every finished probe in fields.csv, as an uninterrupted probe gives it."""
+    p500 = REPO / "tests" / "fixtures" / "p500-mu0.1"
+    p = unjam.read_packing(p500)
+    ks = [int(k) for k in np.flatnonzero(p.contacts.fn > 1e-9 * p.F0)[:6]]  # ~2-4 s each
+    proc = subprocess.Popen([sys.executable, SCRIPT, str(p500), "--contacts", *map(str, ks), "--threads", "2",
+                             "--out", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().startswith("probes 1 / 6"), proc.stderr.read()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 3, err
+    table = rows(tmp_path)
+    assert 1 <= len(table) < 6 and f"interrupted: {len(table)} of 6 contacts saved" in err
+    assert [int(r["contact"]) for r in table] == [k for k in ks if str(k) in {r["contact"] for r in table}]
+    again = unjam.probe(p, contacts=[int(r["contact"]) for r in table], method="cd", cd_start="compliant")
+    assert [float(r["f_crit_cd"]) for r in table] == [q.f_crit for q in again]
+    assert all((tmp_path / "fields" / f"{r['contact']}.npz").is_file() for r in table)
 
 
 def test_the_contacts_of_a_campaign(tmp_path):
