@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "unjam/core/campaign_time.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/work_source.hpp"
 
@@ -72,6 +73,23 @@ TEST(WorkSource, CancelledTaskOfAShardLeavesTheShardNotFinished) {
   const auto [mine, done] = run_tasks(other, 12, 7);
   EXPECT_TRUE(done);
   EXPECT_EQ(mine, (std::set<int>{0, 3, 6, 9}));
+}
+
+// The ETA of a resumed campaign comes from every run's busy seconds per task: 107 probes in
+// 12 240 busy s (two earlier runs) and one more of 654 s in this run, on 2 threads, leave 192
+// probes at (12 240 + 654) / 108 s each, two at a time.
+TEST(CampaignEta, IsEveryRunsBusyTimePerTaskOverTheWorkers) {
+  const CampaignTime so_far = CampaignTime{2, 6100.0, 12240.0, 0} + CampaignTime{1, 654.0, 654.0, 0};
+  EXPECT_DOUBLE_EQ(campaign_eta(so_far, 108, 192, 2), 192.0 * 12894.0 / 108.0 / 2.0);
+  EXPECT_DOUBLE_EQ(campaign_eta(so_far, 108, 192, 1), 192.0 * 12894.0 / 108.0);
+  // Untimed tasks (a checkpoint that did not record its time) are left out of the pace.
+  const CampaignTime partly = CampaignTime{0, 0.0, 0.0, 100} + CampaignTime{1, 50.0, 100.0, 0};
+  EXPECT_DOUBLE_EQ(campaign_eta(partly, 110, 40, 2), 40.0 * 100.0 / 10.0 / 2.0);
+  EXPECT_DOUBLE_EQ(campaign_eta(so_far, 300, 0, 2), 0.0);
+  // Unknown before any timed task, and without workers.
+  EXPECT_EQ(campaign_eta(CampaignTime{1, 5.0, 0.0, 0}, 0, 300, 2), -1.0);
+  EXPECT_EQ(campaign_eta(partly, 100, 40, 2), -1.0);
+  EXPECT_EQ(campaign_eta(so_far, 108, 192, 0), -1.0);
 }
 
 }  // namespace

@@ -17,6 +17,13 @@ CampaignTime one_run(double wall, const std::vector<RankLoad>& loads) {
   return t;
 }
 
+double campaign_eta(const CampaignTime& so_far, long long done, long long remaining, int workers) {
+  const long long timed = done - so_far.untimed;
+  if (timed <= 0 || !(so_far.busy_seconds > 0.0) || workers < 1) return -1.0;
+  if (remaining <= 0) return 0.0;
+  return static_cast<double>(remaining) * so_far.busy_seconds / static_cast<double>(timed) / workers;
+}
+
 nlohmann::json to_json(const CampaignTime& t) {
   return {{"runs", t.runs}, {"wall_seconds", t.wall_seconds}, {"busy_seconds", t.busy_seconds},
           {"untimed", t.untimed}};

@@ -25,6 +25,11 @@ CampaignTime operator+(const CampaignTime& a, const CampaignTime& b);
 // the distributor has them).
 CampaignTime one_run(double wall, const std::vector<RankLoad>& loads);
 nlohmann::json to_json(const CampaignTime& t);
+// The seconds left (-1: unknown) for `remaining` tasks at the busy seconds per task of every
+// run so far (`so_far`, over the `done` tasks it holds, its untimed ones left out) on `workers`
+// threads: so a resumed campaign's first ETA is its earlier runs' pace, not that of the one or
+// two tasks this run has finished. Unknown before any timed task.
+double campaign_eta(const CampaignTime& so_far, long long done, long long remaining, int workers);
 // A record as to_json writes it (a checkpoint's "runs", a summary's or shard's "all_runs") of
 // a campaign of `tasks` tasks; a missing (null) or invalid one leaves them all untimed. Never
 // throws: the record is not part of a checkpoint's state.

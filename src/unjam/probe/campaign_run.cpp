@@ -44,10 +44,10 @@ CheckpointedCampaignResult run_checkpointed_campaign(const Packing& packing,
   };
   CampaignHooks hooks;
   if (options.progress)
-    hooks.progress = [&](int done, int all) {
-      const double elapsed = seconds(t0);
-      const double rate = (done - static_cast<double>(done_before)) / std::max(elapsed, 1e-9);
-      options.progress(done, all, elapsed, rate > 0 ? (all - done) / rate : -1);
+    hooks.progress = [&](int done, int all) {  // within the gathering, as the checkpoint hook
+      int workers = 0;
+      for (const RankLoad& l : distributor.loads()) workers += l.threads;
+      options.progress(done, all, seconds(t0), campaign_eta(time_so_far(), done, all - done, workers));
     };
   hooks.checkpoint = [&](const CampaignState& st) {
     if (seconds(last_checkpoint) < options.checkpoint_s && !interrupted()) return;
