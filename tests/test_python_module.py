@@ -173,6 +173,31 @@ def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
     assert np.all(b["fn_min"] <= b["fn"] + 1e-9) and np.all(b["fn"] <= b["fn_max"] + 1e-9)
 
 
+def test_bounds_report_their_progress_and_a_callbacks_exception_stops_them(tmp_path, p50):
+    """progress= gets a dict at the first LP, every 2 s and at the end (done = total = 2 N_c);
+    an exception it raises stops the LPs as Ctrl-C does: raised, the checkpoint saved, and
+    the resumed run gives the intervals of one uninterrupted run."""
+    seen = []
+    whole = unjam.bounds(p50, threads=2, progress=seen.append)
+    total = 2 * len(whole["contact"])
+    assert seen[0]["done"] >= 1 and seen[-1]["done"] == seen[-1]["total"] == total
+    assert [d["done"] for d in seen] == sorted({d["done"] for d in seen})  # rising, each once
+    assert all(d["elapsed_s"] >= 0.0 and d["eta_s"] >= 0.0 for d in seen) and seen[-1]["eta_s"] == 0.0
+
+    def stop(d):
+        raise RuntimeError(f"stop at {d['done']}")
+
+    checkpoint = tmp_path / "checkpoint.json"
+    with pytest.raises(RuntimeError, match="stop at"):
+        unjam.bounds(p50, threads=2, checkpoint=checkpoint, progress=stop)
+    saved = json.loads(checkpoint.read_text())
+    assert 0 < sum(x is not None for x in saved["fn_min"] + saved["fn_max"]) < total
+    resumed = unjam.bounds(p50, threads=1, checkpoint=checkpoint)
+    assert not checkpoint.exists()
+    for name in ("fn_min", "fn_max"):
+        assert resumed[name].tolist() == whole[name].tolist()
+
+
 def test_bounds_resume_a_stopped_runs_checkpoint_bit_for_bit(tmp_path, p50):
     """The checkpoint of `unjam bounds --stop-after` (its packing unnamed, as the module names
     it) resumed by unjam.bounds(checkpoint=...): the intervals of one uninterrupted run, the

@@ -248,15 +248,45 @@ py::dict campaign_settings(const Packing& p, const std::filesystem::path& path) 
 // packing or other settings is refused), saves it every `checkpoint_every` seconds and when
 // interrupted, and removes it once every interval is known (campaign/bounds_checkpoint; the
 // file is that of `unjam bounds`, with the packing unnamed).
+// progress: given a dict (done, total LPs, elapsed_s, eta_s at this run's pace) every 2 s and
+// at the end, under the GIL on the thread that gathers the LP; its first
+// exception stops the LPs as Ctrl-C does (the checkpoint saved) and is raised.
 py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method,
-                const std::optional<std::filesystem::path>& checkpoint, double checkpoint_every) {
+                const std::optional<std::filesystem::path>& checkpoint, double checkpoint_every,
+                std::optional<py::function> progress) {
   if (method != "barrier" && method != "simplex") throw Error("method must be barrier or simplex");
   if (!(checkpoint_every >= 0.0)) throw Error("checkpoint_every must be a non-negative number of seconds");
   const auto t_start = std::chrono::steady_clock::now();
+  const auto elapsed = [&t_start] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  };
   ForceBoundsOptions lp;
   lp.method = method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
   SignalPoll poll;
-  lp.should_stop = [&poll] { return poll(); };
+  std::atomic<bool> callback_failed{false};
+  std::optional<py::error_already_set> callback_error;
+  const auto stop = [&] { return callback_failed.load() || poll(); };
+  lp.should_stop = stop;
+  if (progress)
+    lp.progress = [&, first = -1, reported = -1, last = -1e9](int done, int total) mutable {  // one call at a time
+      if (first < 0) first = done - 1;  // LPs known before this run (a resumed checkpoint's)
+      const double t = elapsed();
+      if (callback_failed || done == reported || (done < total && t - last < 2.0)) return;
+      last = t;
+      reported = done;
+      py::gil_scoped_acquire gil;
+      try {
+        py::dict d;
+        d["done"] = done;
+        d["total"] = total;
+        d["elapsed_s"] = t;
+        d["eta_s"] = t * (total - done) / (done - first);  // at this run's pace
+        (*progress)(d);
+      } catch (py::error_already_set& e) {
+        callback_error = std::move(e);
+        callback_failed = true;
+      }
+    };
   std::optional<EquilibriumSystem> sys;
   std::optional<BoundsCheckpoint> saved;
   ForceBounds b;
@@ -273,16 +303,18 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     };
     if (checkpoint) {
       saved.emplace(*checkpoint, bounds_checkpoint_settings("", p, gap_tol, fn_tol, method, "", sys->num_contacts()));
-      saved->attach(lp, checkpoint_every, 0, [&poll] { return poll(); }, time_so_far);
+      saved->attach(lp, checkpoint_every, 0, stop, time_so_far);
     }
     b = compute_force_bounds(*sys, lp, dist);  // incomplete if should_stop stopped it
     if (saved && !b.complete) saved->save(b, time_so_far());
     if (saved && b.complete) saved->remove();
     if (b.complete) rank = equilibrium_rank(*sys);
   } catch (const Error&) {
+    if (callback_error) throw std::move(*callback_error);
     poll.rethrow_if_interrupted();
     throw;
   }
+  if (callback_error) throw std::move(*callback_error);
   poll.rethrow_if_interrupted();
   const int Nc = sys->num_contacts();
   py::array_t<int> contact(Nc), a(Nc), bb(Nc);
@@ -455,11 +487,14 @@ void bind_compute(py::module_& m) {
         "tool would not have written on this packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
-        py::arg("checkpoint") = py::none(), py::arg("checkpoint_every") = 30.0,
+        py::arg("checkpoint") = py::none(), py::arg("checkpoint_every") = 30.0, py::arg("progress") = py::none(),
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`. "
         "checkpoint: a file to resume from (if it is there) and to save the intervals known so far in, "
         "every checkpoint_every seconds and when interrupted (Ctrl-C: KeyboardInterrupt once it is saved); "
-        "removed once every interval is known. A checkpoint of another packing or other settings is refused");
+        "removed once every interval is known. A checkpoint of another packing or other settings is refused. "
+        "progress: a callable given a dict (done, total: LPs, the resumed ones counted as done; elapsed_s, "
+        "eta_s: at this run's pace) every 2 s and at the end; an exception it raises "
+        "stops the LPs as Ctrl-C does (the checkpoint saved) and is raised");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
         "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
   m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),
