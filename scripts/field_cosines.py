@@ -4,7 +4,7 @@ Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
                      (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
                      [--cd-start static|compliant|interior] [--cd-max-pieces M]
                      [--cd-compliant-start C] [--g G] [--dt DT] [--threads T]
-                     [--out DIR]
+                     [--running-every S] [--out DIR]
 
 The lp probe (`--method lp`) takes F_crit as the LP maximum and its field from the LP
 optimum's active set; the paper's probe (`--method cd`) solves the contact-dynamics step
@@ -112,6 +112,9 @@ def parse(argv):
     ap.add_argument("--near", type=float, default=5.0,
                     help="radius of the near field, in mean grain diameters (default 5)")
     ap.add_argument("--threads", type=int, default=0, help="threads (0: all cores)")
+    ap.add_argument("--running-every", type=float, default=300.0,
+                    help="a line for every cd probe still running after another this many seconds "
+                         "(default 300, as unjam probe --running-every)")
     ap.add_argument("--chunk", type=int, default=8, help=argparse.SUPPRESS)  # the table is saved after every probe
     ap.add_argument("--out", help="output directory (default: PACKING-fields)")
     a = ap.parse_args(argv)
@@ -123,6 +126,8 @@ def parse(argv):
         v = getattr(a, name)
         if v is not None and not (0 < v < float("inf")):
             ap.error(f"--{name} must be a finite number > 0, got {v}")
+    if not (0 <= a.running_every < float("inf")):
+        ap.error(f"--running-every must be a finite number >= 0, got {a.running_every}")
     if not (0 < a.near < float("inf")):
         ap.error(f"--near must be a finite number > 0, got {a.near}")
     if a.threads < 0 or a.chunk < 1:
@@ -340,6 +345,10 @@ def main(argv):
     common = dict(g=a.g, threads=a.threads)
 
     def finished(d):  # one cd probe done (unjam.probe's progress): its row, the table saved
+        if d["event"] == "running":  # a sign of life of a long probe, every --running-every s of it
+            print(f"  contact {d['contact']}: probing for {d['seconds']:.0f} s ({d['polls']} pieces so far)",
+                  flush=True)
+            return
         r_cd = d["result"]
         rows.append(row(p, lp[d["index"]], r_cd, a))
         rows.sort(key=lambda r: order[int(r["contact"])])
@@ -351,7 +360,7 @@ def main(argv):
         lp = unjam.probe(p, contacts=todo, method="lp", **common) if todo else []
         if todo:
             unjam.probe(p, contacts=todo, method="cd", cd=cd_settings, dt=a.dt, window=window,
-                        progress=finished, **common)
+                        progress=finished, running_every=a.running_every, **common)
     except KeyboardInterrupt:
         write_table(table, rows, COLUMNS)
         print(f"interrupted: {len(rows)} of {len(ks)} contacts saved in {table}; "

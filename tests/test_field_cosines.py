@@ -7,6 +7,7 @@ by hand: PYTHONPATH=build/release/python UNJAM=build/release/unjam \
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -160,6 +161,18 @@ def test_ctrl_c_keeps_every_probe_finished_before_it(tmp_path):
     again = unjam.probe(p, contacts=[int(r["contact"]) for r in table], method="cd", cd_start="compliant")
     assert [float(r["f_crit_cd"]) for r in table] == [q.f_crit for q in again]
     assert all((tmp_path / "fields" / f"{r['contact']}.npz").is_file() for r in table)
+
+
+def test_long_probes_show_that_they_are_running(tmp_path):
+    """--running-every S: a line per cd probe still running after every S seconds (0: at every
+    piece), with its pieces so far; the table as without them."""
+    r = run(P50, "--contacts", 0, 1, "--threads", 1, "--running-every", 0, "--out", tmp_path / "a")
+    lines = [x for x in r.stdout.splitlines() if "probing for" in x]
+    assert lines and {x.split(":")[0].strip() for x in lines} <= {"contact 0", "contact 1"}
+    assert all(re.search(r"\(\d+ pieces so far\)$", x) for x in lines)
+    run(P50, "--contacts", 0, 1, "--threads", 1, "--out", tmp_path / "b")
+    assert rows(tmp_path / "a") == rows(tmp_path / "b")
+    assert run(P50, "--contacts", 0, "--running-every", -1, ok=False).returncode == 2
 
 
 def test_the_contacts_of_a_campaign(tmp_path):

@@ -126,6 +126,7 @@ def test_probe_reports_each_finished_probe(p50):
     for threads in (1, 2):
         seen = []
         results = unjam.probe(p50, contacts=ks, threads=threads, progress=seen.append)
+        assert {d["event"] for d in seen} == {"finished"}  # lp probes do not report running
         assert [d["done"] for d in seen] == list(range(1, len(ks) + 1))
         assert {d["total"] for d in seen} == {len(ks)}
         assert sorted(d["index"] for d in seen) == list(range(len(ks)))
@@ -143,6 +144,24 @@ def test_probe_reports_each_finished_probe(p50):
     assert len(one) == 1 and one[0]["result"].f_crit == r.f_crit and one[0]["total"] == 1
 
 
+def test_a_long_probe_reports_that_it_is_running(p50):
+    """running_every=0: a 'running' event at every poll of an nlgs probe (one per 16 sweeps),
+    with its contact and its polls so far, then its 'finished' event."""
+    seen = []
+    r = unjam.probe(p50, contact=3, method="nlgs", velocity_tol=1e-14, max_sweeps=3200, running_every=0.0,
+                    progress=seen.append)
+    running = [d for d in seen if d["event"] == "running"]
+    assert seen[-1]["event"] == "finished" and seen[-1]["result"].sweeps == r.sweeps == 3200
+    assert len(running) >= 100 and {d["contact"] for d in running} == {3}
+    assert [d["polls"] for d in running] == sorted(d["polls"] for d in running) and running[-1]["polls"] >= 100
+    assert all(d["done"] == 0 and d["total"] == 1 and d["seconds"] >= 0.0 for d in running)
+    quiet = []  # the default interval (300 s, as --running-every): none for this short probe
+    unjam.probe(p50, contact=3, method="nlgs", velocity_tol=1e-14, max_sweeps=3200, progress=quiet.append)
+    assert [d["event"] for d in quiet] == ["finished"]
+    with pytest.raises(unjam.Error, match="running_every"):
+        unjam.probe(p50, contact=3, running_every=-1.0, progress=print)
+
+
 def test_an_exception_of_the_probe_progress_stops_the_probes():
     """The callback's exception is raised, and no probe is reported after it."""
     p = unjam.read_packing(FIXTURE)
@@ -150,6 +169,7 @@ def test_an_exception_of_the_probe_progress_stops_the_probes():
 
     def stop_at_third(d):
         calls.append(d["done"])
+        assert d["event"] == "finished"
         if len(calls) == 3:
             raise RuntimeError("enough")
 

@@ -155,16 +155,17 @@ CampaignSettings probe_settings(const Packing& p, const std::string& method, dou
 
 // probe_contacts (in parallel; Ctrl-C checked between probes and, by the calling thread's
 // probe, inside it, which abandons every running probe): a ProbeResult for contact=K, a list
-// in the order of contacts=[...]. progress gets each finished probe as it arrives, under the
-// GIL on the thread that gathers it; its first exception stops the probes (as Ctrl-C does) and
-// is raised.
+// in the order of contacts=[...]. progress gets each finished probe as it arrives, and a sign of
+// life of each probe every running_every seconds, under the GIL on the thread that gathers it
+// or runs the probe; its first exception stops the probes (as Ctrl-C does) and is raised.
 py::object probe(const Packing& p, std::optional<int> contact, std::optional<std::vector<int>> contacts,
                  const std::string& method, double g, std::optional<double> dt, double velocity_tol,
                  long long max_sweeps, const std::string& cd_start, int cd_softer_starts,
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
                  double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
-                 std::optional<CdPathSettings> typed, int threads, std::optional<py::function> progress) {
+                 std::optional<CdPathSettings> typed, int threads, std::optional<py::function> progress,
+                 double running_every) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd = cd_settings(cd_start, cd_compliant_start, cd_softer_starts, cd_max_pieces, cd_accept_residual,
@@ -181,32 +182,58 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   std::atomic<bool> callback_failed{false};
   std::optional<py::error_already_set> callback_error;
   s.nlgs.cancel = [&] { return callback_failed.load() || poll(); };
-  std::function<void(const FinishedProbe&)> report;
+  if (!(running_every >= 0.0)) throw Error("running_every must be >= 0 seconds");
+  ProbeListHooks hooks;
+  hooks.should_stop = [&] { return callback_failed.load() || poll(); };
   const auto t0 = std::chrono::steady_clock::now();
-  if (progress)
-    report = [&](const FinishedProbe& f) {  // on the gathering thread, one call at a time
-      if (callback_failed) return;
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      py::gil_scoped_acquire gil;
-      try {
+  std::atomic<int> done{0};
+  // The callback under the GIL, from a probe's or the gathering thread; its first exception
+  // is kept and stops the probes.
+  const auto call = [&](const std::function<py::dict()>& make) {
+    if (callback_failed) return;
+    py::gil_scoped_acquire gil;
+    if (callback_failed) return;
+    try {
+      py::dict d = make();
+      d["done"] = done.load();
+      d["total"] = static_cast<int>(list.size());
+      d["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      (*progress)(d);
+    } catch (py::error_already_set& e) {
+      callback_error = std::move(e);
+      callback_failed = true;
+    }
+  };
+  if (progress) {
+    hooks.progress = [&](const FinishedProbe& f) {
+      done = f.done;
+      call([&] {
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         py::dict d;
+        d["event"] = "finished";
         d["index"] = f.index;
         d["contact"] = list[f.index];
         d["result"] = py::cast(*f.result);
-        d["done"] = f.done;
-        d["total"] = f.total;
-        d["elapsed_s"] = elapsed;
         d["eta_s"] = elapsed / f.done * (f.total - f.done);
-        (*progress)(d);
-      } catch (py::error_already_set& e) {
-        callback_error = std::move(e);
-        callback_failed = true;
-      }
+        return d;
+      });
     };
+    hooks.running = [&](int contact, double seconds, long long polls) {
+      call([&] {
+        py::dict d;
+        d["event"] = "running";
+        d["contact"] = contact;
+        d["seconds"] = seconds;
+        d["polls"] = polls;
+        return d;
+      });
+    };
+    hooks.running_every_s = running_every;
+  }
   {
     py::gil_scoped_release release;
     const ThreadCount count(threads);
-    results = probe_contacts(p, s, list, [&] { return callback_failed.load() || poll(); }, report);
+    results = probe_contacts(p, s, list, hooks);
   }
   if (callback_error) throw std::move(*callback_error);
   poll.rethrow_if_interrupted();
@@ -451,7 +478,7 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood,
         py::arg("cd_compliant_start") = cd.cd.compliant_start,
         py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("cd") = py::none(),
-        py::arg("threads") = 0, py::arg("progress") = py::none(),
+        py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("running_every") = kRunningEverySeconds,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -473,10 +500,13 @@ void bind_compute(py::module_& m) {
         "a cd probe stops at a near-exact solution instead of searching on for an exact one, as `unjam probe "
         "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\"); cd: all of the cd method's "
         "settings as one unjam.CdSettings (its start included), instead of the cd_* keywords, which must then "
-        "be left at their defaults; progress: a callable given a dict (index: the position in contacts, "
-        "contact, result: its ProbeResult, done, total, elapsed_s, eta_s) once per finished probe, in the "
-        "order they finish (keep the results it is given: Ctrl-C raises KeyboardInterrupt and returns "
-        "nothing); an exception it raises stops the probes and is raised");
+        "be left at their defaults; progress: a callable given a dict with event 'finished' once per "
+        "finished probe, in the order they finish (index: the position in contacts, contact, result: its "
+        "ProbeResult, done, total, elapsed_s, eta_s; keep the results it is given: Ctrl-C raises "
+        "KeyboardInterrupt and returns nothing), and with event 'running' every running_every seconds of "
+        "a probe that runs that long (nlgs, lemke, cd; contact, seconds, polls: cd pieces or nlgs sweeps / 16 "
+        "so far, done, total, elapsed_s), as `unjam probe --running-every`; an exception it raises stops the "
+        "probes and is raised");
   m.def("campaign_settings", &campaign_settings, py::arg("packing"), py::arg("path"),
         "the settings of a campaign of `unjam probe --all` or `--sample K` on this packing, read from its "
         "probe_summary.json or probe_checkpoint.json (path): a dict with method, g, dt (None for lp), cd "

@@ -52,9 +52,11 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
   omp_set_num_threads(threads);  // probe_contacts runs on omp_get_max_threads() threads
   std::vector<ProbeResult> results;
   try {
-    results = probe_contacts(packing, s, contacts, {}, [&](const FinishedProbe& f) {
+    ProbeListHooks hooks;
+    hooks.progress = [&](const FinishedProbe& f) {
       if (in.progress) in.progress(what, f.done, f.total);
-    });
+    };
+    results = probe_contacts(packing, s, contacts, hooks);
   } catch (...) {
     omp_set_num_threads(saved);
     throw;

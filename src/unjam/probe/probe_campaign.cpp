@@ -296,10 +296,10 @@ ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int conta
 }
 
 std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings& s,
-                                        const std::vector<int>& contacts,
-                                        const std::function<bool()>& should_stop,
-                                        const std::function<void(const FinishedProbe&)>& progress) {
+                                        const std::vector<int>& contacts, const ProbeListHooks& hooks) {
   const int M = static_cast<int>(p.contacts.size());
+  if (hooks.running && !(hooks.running_every_s >= 0.0))
+    throw Error("probe_contacts: running_every_s must be >= 0 (got " + std::to_string(hooks.running_every_s) + ")");
   for (const int k : contacts)
     if (k < 0 || k >= M)
       throw Error("contact " + std::to_string(k) + ": the packing has " + std::to_string(M) + " contacts");
@@ -307,14 +307,16 @@ std::vector<ProbeResult> probe_contacts(const Packing& p, const CampaignSettings
   std::iota(tasks.begin(), tasks.end(), 0);
   std::vector<std::optional<ProbeResult>> results(contacts.size());
   WorkLoop loop;
-  loop.should_stop = either(should_stop, s.nlgs.cancel);
-  loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, &contacts); };
+  loop.should_stop = either(hooks.should_stop, s.nlgs.cancel);
+  loop.work = [&](WorkSource& source) {
+    probe_tasks(source, p, s, &contacts, hooks.running, hooks.running_every_s);
+  };
   int finished = 0;
   loop.gather = [&](std::vector<TaskResult>& done) {
     for (TaskResult& tr : done) {
       results[tr.task] = decode(tr.bytes);
       ++finished;
-      if (progress) progress({tr.task, &*results[tr.task], finished, static_cast<int>(contacts.size())});
+      if (hooks.progress) hooks.progress({tr.task, &*results[tr.task], finished, static_cast<int>(contacts.size())});
     }
   };
   LocalDistributor local;

@@ -190,27 +190,38 @@ bool run_campaign(const Packing& packing, const CampaignSettings& settings, Camp
 // returns true).
 ProbeResult probe_contact(const Packing& packing, const CampaignSettings& settings, int contact);
 
-// Probes every contact of `contacts` (indices into packing.contacts, any order, repeats
-// allowed) with the campaign's method, on omp_get_max_threads() threads as run_campaign does
-// (one probe per thread at a time; each thread keeps its LP model): the results in the order
-// of `contacts`, the same bytes for any thread count. should_stop (may be empty) is polled
-// before every probe is handed out; settings.nlgs.cancel (may be empty, thread safe) is polled
-// there too and by the running probes, which it abandons. Once either returns true, the
-// results of the probes finished before the first one not finished (a prefix of `contacts`)
-// are returned. progress (may be empty) is called once per finished probe, as results arrive
-// (in the order they finish, which depends on the thread count), one call at a time, from
-// whichever thread gathers it. Throws unjam::Error for an index out of range, and the first
-// error of a probe (naming its contact).
+// One finished probe of probe_contacts.
 struct FinishedProbe {
   int index = 0;  // position in `contacts`
   const ProbeResult* result = nullptr;
   int done = 0;   // probes finished so far, this one included
   int total = 0;  // contacts.size()
 };
+
+struct ProbeListHooks {
+  // Polled before every probe is handed out; may be empty.
+  std::function<bool()> should_stop;
+  // Called once per finished probe, as results arrive (in the order they finish, which
+  // depends on the thread count), one call at a time, from whichever thread gathers it; may
+  // be empty.
+  std::function<void(const FinishedProbe&)> progress;
+  // A sign of life of long probes, as CampaignHooks::running (from the probe's thread, with
+  // its contact, seconds and polls so far, every running_every_s seconds of it); may be empty.
+  std::function<void(int contact, double seconds, long long polls)> running;
+  double running_every_s = kRunningEverySeconds;
+};
+
+// Probes every contact of `contacts` (indices into packing.contacts, any order, repeats
+// allowed) with the campaign's method, on omp_get_max_threads() threads as run_campaign does
+// (one probe per thread at a time; each thread keeps its LP model): the results in the order
+// of `contacts`, the same bytes for any thread count. hooks.should_stop and
+// settings.nlgs.cancel (may be empty, thread safe) are polled before every probe is handed
+// out, and the cancel by the running probes too, which it abandons. Once either returns true,
+// the results of the probes finished before the first one not finished (a prefix of
+// `contacts`) are returned. Throws unjam::Error for an index out of range or a negative
+// running_every_s, and the first error of a probe (naming its contact).
 std::vector<ProbeResult> probe_contacts(const Packing& packing, const CampaignSettings& settings,
-                                        const std::vector<int>& contacts,
-                                        const std::function<bool()>& should_stop = {},
-                                        const std::function<void(const FinishedProbe&)>& progress = {});
+                                        const std::vector<int>& contacts, const ProbeListHooks& hooks = {});
 
 // The cd probes of `state` stopped by a budget of max_pieces pieces per probe
 // (CdPathSettings::max_probe_pieces; their sweeps are max_pieces + 1), and those of them that
