@@ -6,8 +6,10 @@
 // ProbeSettings::cancel inside the running probes).
 #include <atomic>
 #include <chrono>
+#include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include <pybind11/pybind11.h>
 
@@ -47,6 +49,38 @@ class SignalPoll {
   std::thread::id owner_ = std::this_thread::get_id();
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
   std::atomic<bool> interrupted_{false};
+};
+
+// A Python callable (progress=) called from the library's threads while a long call has
+// released the GIL: each call takes the GIL and passes make()'s value (built under it). Its
+// first exception is kept and later calls are skipped; failed() (thread safe) is then true, to
+// stop the work as Ctrl-C does, and rethrow_if_failed() raises it once the GIL is held again.
+// Made and destroyed with the GIL held.
+class Callback {
+ public:
+  explicit Callback(std::optional<py::function> f) : f_(std::move(f)) {}
+  explicit operator bool() const { return f_.has_value(); }
+  bool failed() const { return failed_; }
+  template <class Make>
+  void operator()(Make&& make) {
+    if (!f_ || failed_) return;
+    py::gil_scoped_acquire gil;
+    if (failed_) return;
+    try {
+      (*f_)(make());
+    } catch (py::error_already_set& e) {
+      error_ = std::move(e);
+      failed_ = true;
+    }
+  }
+  void rethrow_if_failed() {
+    if (error_) throw std::move(*error_);
+  }
+
+ private:
+  std::optional<py::function> f_;
+  std::atomic<bool> failed_{false};
+  std::optional<py::error_already_set> error_;
 };
 
 // Sets the OpenMP thread count of the calling thread for one call (0: leave it), and puts

@@ -83,21 +83,14 @@ Packing run_compaction(Packing p, const PackArgs& a) {
   if (a.out) lock.emplace(*a.out, p.meta.command);
   SignalPoll poll;
   CompactionResult r;
-  std::optional<py::error_already_set> callback_error;
+  Callback progress(a.progress);
   {
     py::gil_scoped_release release;
     const ThreadCount threads(a.threads);
     CompactionHooks hooks;
-    hooks.should_stop = [&] { return callback_error.has_value() || poll(); };
-    if (a.progress)
-      hooks.progress = [&](const CompactionProgress& g) {
-        py::gil_scoped_acquire gil;
-        try {
-          (*a.progress)(progress_dict(g));
-        } catch (py::error_already_set& e) {
-          callback_error = std::move(e);
-        }
-      };
+    hooks.should_stop = [&] { return progress.failed() || poll(); };
+    if (progress)
+      hooks.progress = [&](const CompactionProgress& g) { progress([&] { return progress_dict(g); }); };
     if (a.out) {
       hooks.checkpoint = [&a](const Packing& q) { write_packing(*a.out, q); };
       hooks.checkpoint_s = 60.0;
@@ -105,7 +98,7 @@ Packing run_compaction(Packing p, const PackArgs& a) {
     r = compact(p, a.compaction, hooks);
     if (a.out) write_packing(*a.out, p);
   }
-  if (callback_error) throw std::move(*callback_error);
+  progress.rethrow_if_failed();
   poll.rethrow_if_interrupted();
   if (!r.is_static) throw Error("no static packing within max_steps");
   return p;
@@ -179,49 +172,37 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window);
   std::vector<ProbeResult> results;
   SignalPoll poll;
-  std::atomic<bool> callback_failed{false};
-  std::optional<py::error_already_set> callback_error;
-  s.nlgs.cancel = [&] { return callback_failed.load() || poll(); };
   if (!(running_every >= 0.0)) throw Error("running_every must be >= 0 seconds");
+  Callback report(std::move(progress));
+  s.nlgs.cancel = [&] { return report.failed() || poll(); };
   ProbeListHooks hooks;
-  hooks.should_stop = [&] { return callback_failed.load() || poll(); };
+  hooks.should_stop = [&] { return report.failed() || poll(); };
   const auto t0 = std::chrono::steady_clock::now();
+  const auto elapsed = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   std::atomic<int> done{0};
-  // The callback under the GIL, from a probe's or the gathering thread; its first exception
-  // is kept and stops the probes.
-  const auto call = [&](const std::function<py::dict()>& make) {
-    if (callback_failed) return;
-    py::gil_scoped_acquire gil;
-    if (callback_failed) return;
-    try {
-      py::dict d = make();
-      d["done"] = done.load();
-      d["total"] = static_cast<int>(list.size());
-      d["elapsed_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      (*progress)(d);
-    } catch (py::error_already_set& e) {
-      callback_error = std::move(e);
-      callback_failed = true;
-    }
+  const auto event = [&](const char* name) {  // the keys every event has
+    py::dict d;
+    d["event"] = name;
+    d["done"] = done.load();
+    d["total"] = static_cast<int>(list.size());
+    d["elapsed_s"] = elapsed();
+    return d;
   };
-  if (progress) {
+  if (report) {
     hooks.progress = [&](const FinishedProbe& f) {
       done = f.done;
-      call([&] {
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        py::dict d;
-        d["event"] = "finished";
+      report([&] {
+        py::dict d = event("finished");
         d["index"] = f.index;
         d["contact"] = list[f.index];
         d["result"] = py::cast(*f.result);
-        d["eta_s"] = elapsed / f.done * (f.total - f.done);
+        d["eta_s"] = d["elapsed_s"].cast<double>() / f.done * (f.total - f.done);
         return d;
       });
     };
     hooks.running = [&](int contact, double seconds, long long polls) {
-      call([&] {
-        py::dict d;
-        d["event"] = "running";
+      report([&] {
+        py::dict d = event("running");
         d["contact"] = contact;
         d["seconds"] = seconds;
         d["polls"] = polls;
@@ -235,7 +216,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
     const ThreadCount count(threads);
     results = probe_contacts(p, s, list, hooks);
   }
-  if (callback_error) throw std::move(*callback_error);
+  report.rethrow_if_failed();
   poll.rethrow_if_interrupted();
   if (contact) return py::cast(std::move(results.front()));
   return py::cast(std::move(results));
@@ -290,29 +271,24 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   ForceBoundsOptions lp;
   lp.method = method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
   SignalPoll poll;
-  std::atomic<bool> callback_failed{false};
-  std::optional<py::error_already_set> callback_error;
-  const auto stop = [&] { return callback_failed.load() || poll(); };
+  Callback report(std::move(progress));
+  const auto stop = [&] { return report.failed() || poll(); };
   lp.should_stop = stop;
-  if (progress)
+  if (report)
     lp.progress = [&, first = -1, reported = -1, last = -1e9](int done, int total) mutable {  // one call at a time
       if (first < 0) first = done - 1;  // LPs known before this run (a resumed checkpoint's)
       const double t = elapsed();
-      if (callback_failed || done == reported || (done < total && t - last < 2.0)) return;
+      if (done == reported || (done < total && t - last < 2.0)) return;
       last = t;
       reported = done;
-      py::gil_scoped_acquire gil;
-      try {
+      report([&] {
         py::dict d;
         d["done"] = done;
         d["total"] = total;
         d["elapsed_s"] = t;
         d["eta_s"] = t * (total - done) / (done - first);  // at this run's pace
-        (*progress)(d);
-      } catch (py::error_already_set& e) {
-        callback_error = std::move(e);
-        callback_failed = true;
-      }
+        return d;
+      });
     };
   std::optional<EquilibriumSystem> sys;
   std::optional<BoundsCheckpoint> saved;
@@ -337,11 +313,11 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     if (saved && b.complete) saved->remove();
     if (b.complete) rank = equilibrium_rank(*sys);
   } catch (const Error&) {
-    if (callback_error) throw std::move(*callback_error);
+    report.rethrow_if_failed();
     poll.rethrow_if_interrupted();
     throw;
   }
-  if (callback_error) throw std::move(*callback_error);
+  report.rethrow_if_failed();
   poll.rethrow_if_interrupted();
   const int Nc = sys->num_contacts();
   py::array_t<int> contact(Nc), a(Nc), bb(Nc);
