@@ -25,8 +25,9 @@ Outputs, in DIR (default PACKING-fields):
                f_inertia_cd (the cd step's largest net force on a grain, in the units of
                f_crit: docs/probe.md, "The inertia of the step"), in the order of the list.
                Written after every probe (the cd probes run as one list on --threads
-               threads, unjam.probe(progress=...)); a run stopped by Ctrl-C resumes from it (the same command skips the contacts it already holds; a
-               table of other contacts or other settings is refused, not overwritten).
+               threads, unjam.probe(progress=...)); a run stopped by Ctrl-C resumes
+               from it (the same command skips the contacts it already holds; a table of
+               other contacts or other settings is refused, not overwritten).
   settings.json  the packing, --cd-start, --g, --dt and --near the table was made with
   fields/K.npz the two fields of contact K (arrays u_lp, u_cd (N, 2), rot_lp, rot_cd (N,);
                peculiar displacements and rotations as unjam.ProbeResult gives them), for any
@@ -130,8 +131,8 @@ def parse(argv):
         ap.error(f"--running-every must be a finite number >= 0, got {a.running_every}")
     if not (0 < a.near < float("inf")):
         ap.error(f"--near must be a finite number > 0, got {a.near}")
-    if a.threads < 0 or a.chunk < 1:
-        ap.error("--threads must be >= 0 and --chunk >= 1")
+    if a.threads < 0:
+        ap.error("--threads must be >= 0")
     if a.cd_max_pieces is not None and a.cd_max_pieces < 0:
         ap.error(f"--cd-max-pieces must be >= 0 (0: none), got {a.cd_max_pieces}")
     a.out = a.out or a.packing.rstrip("/") + "-fields"
@@ -356,9 +357,8 @@ def main(argv):
         print(f"probes {len(rows)} / {len(ks)}, ETA {d['eta_s']:.0f} s", flush=True)
 
     try:
-        # The lp probes first (short), then the cd probes in one call, each saved as it ends.
-        lp = unjam.probe(p, contacts=todo, method="lp", **common) if todo else []
-        if todo:
+        if todo:  # the lp probes first (short), then the cd probes in one call, each saved as it ends
+            lp = unjam.probe(p, contacts=todo, method="lp", **common)
             unjam.probe(p, contacts=todo, method="cd", cd=cd_settings, dt=a.dt, window=window,
                         progress=finished, running_every=a.running_every, **common)
     except KeyboardInterrupt:

@@ -174,9 +174,8 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   SignalPoll poll;
   if (!(running_every >= 0.0)) throw Error("running_every must be >= 0 seconds");
   Callback report(std::move(progress));
-  s.nlgs.cancel = [&] { return report.failed() || poll(); };
+  s.nlgs.cancel = [&] { return report.failed() || poll(); };  // probe_contacts polls it before each probe too
   ProbeListHooks hooks;
-  hooks.should_stop = [&] { return report.failed() || poll(); };
   const auto t0 = std::chrono::steady_clock::now();
   const auto elapsed = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   std::atomic<int> done{0};
@@ -301,8 +300,7 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
     LocalDistributor dist;
     const auto time_so_far = [&] {
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-      return saved->earlier() + one_run(wall, dist.loads());
+      return saved->earlier() + one_run(elapsed(), dist.loads());
     };
     if (checkpoint) {
       saved.emplace(*checkpoint, bounds_checkpoint_settings("", p, gap_tol, fn_tol, method, "", sys->num_contacts()));

@@ -1,6 +1,5 @@
 #include "unjam/probe/campaign_run.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 
