@@ -18,8 +18,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   exact        with --cd-sample K > 0 (300 at the paper scale), on the sweep's packings of at
                most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd
                --cd-start interior` (--cd-start; --cd-max-pieces, --cd-accept-residual,
-               --cd-compliant-start, --cd-softer-starts and --cd-settle-compliance passed on
-               where given)
+               --cd-compliant-start, --cd-softer-starts, --cd-settle-compliance and
+               --cd-lost-factor passed on where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe cd`, plot_fig4.py;
@@ -123,6 +123,10 @@ def parse_args(argv):
                    "(`unjam probe --cd-settle-compliance`; default 0: never, the rigid limit; it may "
                    "return another of the step's exact solutions at high friction; docs/probe.md, "
                    "\"Settling at an exact solution\")")
+    p.add_argument("--cd-lost-factor", type=float, metavar="L", help="the exact probe drops a "
+                   "path whose forces at the full opening have a residual above L times its "
+                   "compliance (at least 1e-3) in g, >= 0 (`unjam probe --cd-lost-factor`; default "
+                   "0: off; docs/probe.md, \"Paths that lose their digits\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -161,6 +165,9 @@ def parse_args(argv):
     if args.cd_settle_compliance is not None and not (math.isfinite(args.cd_settle_compliance)
                                                       and args.cd_settle_compliance >= 0):
         p.error(f"--cd-settle-compliance must be a finite number >= 0, got {args.cd_settle_compliance}")
+    if args.cd_lost_factor is not None and not (math.isfinite(args.cd_lost_factor)
+                                                and args.cd_lost_factor >= 0):
+        p.error(f"--cd-lost-factor must be a finite number >= 0, got {args.cd_lost_factor}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -184,7 +191,7 @@ def main(argv=None):
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
               "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start",
-              "cd_softer_starts", "cd_settle_compliance"):
+              "cd_softer_starts", "cd_settle_compliance", "cd_lost_factor"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

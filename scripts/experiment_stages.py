@@ -41,10 +41,11 @@ PY = sys.executable or "/usr/bin/python3"
 # cd_softer_starts: its softer starts (`unjam probe --cd-softer-starts`; -1: unjam's default).
 # cd_settle_compliance: end a path at its first exact solution at or below this compliance
 # (`unjam probe --cd-settle-compliance`; 0: unjam's default, never; docs/probe.md, "Settling at
-# an exact solution").
+# an exact solution"). cd_lost_factor: drop the paths whose forces lost their digits (`unjam
+# probe --cd-lost-factor`; 0: unjam's default, off; docs/probe.md, "Paths that lose their digits").
 # They are passed to unjam only where set, so stages cached without them stay valid.
 CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0,
-               "cd_softer_starts": -1, "cd_settle_compliance": 0}
+               "cd_softer_starts": -1, "cd_settle_compliance": 0, "cd_lost_factor": 0}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
              "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
@@ -162,7 +163,8 @@ def cd_options(cfg):
                       ("cd_accept_residual", "--cd-accept-residual"),
                       ("cd_compliant_start", "--cd-compliant-start"),
                       ("cd_softer_starts", "--cd-softer-starts"),
-                      ("cd_settle_compliance", "--cd-settle-compliance")):
+                      ("cd_settle_compliance", "--cd-settle-compliance"),
+                      ("cd_lost_factor", "--cd-lost-factor")):
         value = cfg.get(key, CD_DEFAULTS[key])
         if value != CD_DEFAULTS[key]:
             args += [flag, str(value) if isinstance(value, int) else repr(value)]

@@ -580,6 +580,46 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, negative), Error);
 }
 
+TEST(CdPath, APathThatLostItsDigitsIsDroppedAndTheContinuationGoesSofter) {
+  // CdPathSettings::lost_factor (`--cd-lost-factor`; docs/probe.md, "Paths that lose their
+  // digits"), on p200-mu1, contact 34, compliant start at the quasi-static step. At a factor of
+  // 1e-12 every path that reaches the full opening counts as one whose forces lost their digits:
+  // each is dropped there, not lowered, and the continuation goes on to its next softer start
+  // (compliances 0.1, 1, 10) instead of restarting below it, so the probe has three paths and
+  // no solution. At 1e300 no path is lost, and the probe is the default's, bit for bit.
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings off;
+  off.start = CdPathStart::compliant;
+  ASSERT_EQ(off.lost_factor, 0.0);
+  CdPathSettings every = off, none = off;
+  every.lost_factor = 1e-12;
+  none.lost_factor = 1e300;
+  CdPathStats a, b, c;
+  const CdStepSolution sa = probe_cd_path(p, 34, quasi_static_step(), off, &a);
+  const CdStepSolution sb = probe_cd_path(p, 34, quasi_static_step(), every, &b);
+  const CdStepSolution sc = probe_cd_path(p, 34, quasi_static_step(), none, &c);
+  ASSERT_TRUE(sa.result.converged);
+  EXPECT_EQ(sb.f.size(), 0);
+  EXPECT_FALSE(sb.result.converged);
+  ASSERT_EQ(b.paths.size(), 1u + static_cast<std::size_t>(off.softer_starts));
+  for (std::size_t i = 0; i < b.paths.size(); ++i) {
+    EXPECT_EQ(b.paths[i].failure, "lost") << i;
+    EXPECT_EQ(b.paths[i].lambda_max, 1.0) << i;
+    EXPECT_EQ(b.paths[i].lowerings, 0) << i;
+    EXPECT_EQ(b.paths[i].residual, kNoSolution) << i;
+    EXPECT_DOUBLE_EQ(b.paths[i].compliance, off.compliant_start * std::pow(off.softer_factor, double(i))) << i;
+  }
+  EXPECT_EQ(c.pieces_all, a.pieces_all);
+  EXPECT_EQ(c.paths.size(), a.paths.size());
+  EXPECT_EQ(sc.result.f_crit, sa.result.f_crit);
+  // A negative or non-finite factor is refused.
+  for (double bad : {-1.0, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    CdPathSettings wrong = off;
+    wrong.lost_factor = bad;
+    EXPECT_THROW(probe_cd_path(p, 34, quasi_static_step(), wrong), Error) << bad;
+  }
+}
+
 TEST(CdPath, ReportsNoSolutionWhenThePathIsCutShort) {
   // A path that needs more pieces than allowed says so (no F_crit, residual kNoSolution)
   // instead of returning the forces where it stopped.

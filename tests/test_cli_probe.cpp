@@ -841,6 +841,7 @@ TEST_F(CliProbe, SettlesAtAnExactSolutionWhereTheUserSaysAndTheCampaignRecordsIt
   EXPECT_EQ(stopped_exact, 1);
   EXPECT_EQ(read_json_file(budget / "probe_summary.json")["over_budget"]["exact"].get<int>(), stopped_exact);
   expect_recorded_where_set(campaign, "--cd-settle-compliance 1e-5", "cd_settle_compliance", 1e-5);
+  expect_recorded_where_set(campaign, "--cd-lost-factor 1e3", "cd_lost_factor", 1e3);
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

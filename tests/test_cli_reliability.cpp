@@ -287,6 +287,8 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-accept-residual nan --out " + out.string(), "must be a finite number > 0"},
       {"probe " + fixture.string() + " --contact 1 --cd-settle-compliance 1e-5 --out " + out.string(), "--cd-settle-compliance applies to the cd method, not to lp"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-settle-compliance -1 --out " + out.string(), "--cd-settle-compliance"},
+      {"probe " + fixture.string() + " --contact 1 --cd-lost-factor 1e3 --out " + out.string(), "--cd-lost-factor applies to the cd method, not to lp"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-lost-factor -1 --out " + out.string(), "--cd-lost-factor"},
       {"ensemble " + fixture.string() + " --thin -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --burn-in -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --probe-g nan", "must be a finite number > 0"},

@@ -515,7 +515,8 @@ def test_the_cd_settings_are_one_typed_object():
     assert (d.start, d.compliant_start, d.softer_starts, d.max_pieces, d.accept_residual) == \
         ("static", 0.1, 2, 0, 1e-6)
     assert (d.interior_states_pieces, d.interior_states_stall, d.interior_states_retries,
-            d.interior_iterations, d.interior_neighbourhood, d.settle_compliance) == (0.1, 20, 2, 100, 0.0, 0.0)
+            d.interior_iterations, d.interior_neighbourhood, d.settle_compliance, d.lost_factor) == \
+        (0.1, 20, 2, 100, 0.0, 0.0, 0.0)
     s = unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert s != d and s == unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
@@ -535,6 +536,8 @@ def test_the_cd_settings_are_one_typed_object():
                                   ("interior_neighbourhood", 1.0, "--cd-interior-neighbourhood must be in"),
                                   ("settle_compliance", -1e-5, "--cd-settle-compliance must be >= 0"),
                                   ("settle_compliance", float("nan"), "--cd-settle-compliance must be >= 0"),
+                                  ("lost_factor", -1.0, "--cd-lost-factor must be >= 0"),
+                                  ("lost_factor", float("inf"), "--cd-lost-factor must be >= 0"),
                                   ("start", "soft", "--cd-start must be static, lp, compliant or interior")]:
         t = copy.copy(s)
         with pytest.raises(unjam.Error, match=message):
@@ -562,12 +565,20 @@ def test_the_cd_settings_are_one_typed_object():
     # exact solution below a compliance of 1e-5, in 8 pieces against 134 (docs/probe.md,
     # "Settling at an exact solution"); pickled and compared with the other fields.
     settled = unjam.CdSettings(start="compliant", settle_compliance=1e-5)
-    assert repr(settled).endswith("settle_compliance=1e-05)") and pickle.loads(pickle.dumps(settled)) == settled
+    assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0)")
+    assert pickle.loads(pickle.dumps(settled)) == settled
     assert settled != unjam.CdSettings(start="compliant")
     a = unjam.probe(p, contact=34, method="cd", cd=settled)
     b = unjam.probe(p, contact=34, method="cd", cd_start="compliant")
     assert (a.converged, a.sweeps, b.converged, b.sweeps) == (True, 8, True, 134)
     assert abs(a.f_crit / b.f_crit - 1) < 1e-4 and a.f_crit != b.f_crit
+    # lost_factor (`--cd-lost-factor`, through cd= only): at 1e-12 every path that reaches the
+    # full opening counts as one that lost its digits, so contact 34 has no solution; at 1e300
+    # none does, and the probe is the default's (docs/probe.md, "Paths that lose their digits").
+    lost = unjam.probe(p, contact=34, method="cd", cd=unjam.CdSettings(start="compliant", lost_factor=1e-12))
+    kept = unjam.probe(p, contact=34, method="cd", cd=unjam.CdSettings(start="compliant", lost_factor=1e300))
+    assert (lost.converged, lost.residual) == (False, sys.float_info.max)
+    assert (kept.f_crit, kept.sweeps) == (b.f_crit, b.sweeps)
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -199,6 +199,8 @@ void print_cd_paths(const CdPathStats& stats) {
     else if (a.compliance_end > 0.0)
       std::printf("full opening; %d lowerings, stopped at compliance %.3g (%s)", a.lowerings, a.compliance_end,
                   a.failure.c_str());
+    else if (a.failure == "lost")
+      std::printf("full opening, its forces' digits lost (--cd-lost-factor)");
     else if (a.compliance_settled > 0.0)
       std::printf("full opening; %d lowerings, settled at compliance %.3g (--cd-settle-compliance)", a.lowerings,
                   a.compliance_settled);
@@ -411,15 +413,18 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   char window[96] = "";
   if (s.nlgs.window > 0.0)
     std::snprintf(window, sizeof window, ", in windows of %g mean diameters (clamped)", s.nlgs.window);
-  char budget[96] = "", accept[64] = "", settle[64] = "";
+  char budget[96] = "", accept[64] = "", settle[64] = "", lost[80] = "";
   if (s.cd.max_probe_pieces > 0)  // cd only (validate)
     std::snprintf(budget, sizeof budget, ", at most %lld pieces per probe", s.cd.max_probe_pieces);
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual)  // cd only (validate)
     std::snprintf(accept, sizeof accept, ", stopping at a residual of %g g", s.cd.accept_residual);
   if (s.cd.settle_compliance > 0.0)  // cd only (validate)
     std::snprintf(settle, sizeof settle, ", settling at exact solutions at compliances <= %g", s.cd.settle_compliance);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, omp_get_max_threads(), spread.c_str());
+  if (s.cd.lost_factor > 0.0)  // cd only (validate)
+    std::snprintf(lost, sizeof lost, ", dropping paths that lose their digits (factor %g)", s.cd.lost_factor);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, lost, omp_get_max_threads(),
+               spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
@@ -722,6 +727,14 @@ void add_probe_command(CLI::App& app) {
                   "At low friction the forces have settled by 1e-5 and the last lowerings can spend a probe's budget; "
                   "at mu = 1 it may return another of the step's exact solutions (docs/probe.md, \"Settling at an "
                   "exact solution\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-lost-factor", o->cd.lost_factor,
+                  "cd: drop a path whose forces at the full opening have a residual above this factor times its "
+                  "compliance (at least 1e-3) in g: its solves went through nearly singular state sets and lost "
+                  "their digits. It is not lowered, and the compliant continuation goes on to its next softer "
+                  "start instead of restarting below it (0: off, such a path is lowered and restarted as any other; "
+                  "e.g. 1e3; docs/probe.md, \"Paths that lose their digits\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--window", o->window,

@@ -45,6 +45,7 @@ py::dict fields(const CdPathSettings& s) {
   d["interior_iterations"] = s.interior_max_iterations;
   d["interior_neighbourhood"] = s.interior_neighbourhood;
   d["settle_compliance"] = s.settle_compliance;
+  d["lost_factor"] = s.lost_factor;
   return d;
 }
 
@@ -68,7 +69,7 @@ bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return f
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
                            int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                           double settle_compliance) {
+                           double settle_compliance, double lost_factor) {
   CdPathSettings s;
   s.start = cd_start_from_name(start);
   s.compliant_start = compliant_start;
@@ -81,6 +82,7 @@ CdPathSettings cd_settings(const std::string& start, double compliant_start, int
   s.interior_max_iterations = interior_iterations;
   s.interior_neighbourhood = interior_neighbourhood;
   s.settle_compliance = settle_compliance;
+  s.lost_factor = lost_factor;
   return s;
 }
 
@@ -93,10 +95,11 @@ void bind_cd_settings(py::module_& m) {
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                    double settle_compliance) {
+                    double settle_compliance, double lost_factor) {
           const CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
                                                interior_states_pieces, interior_states_stall, interior_states_retries,
-                                               interior_iterations, interior_neighbourhood, settle_compliance);
+                                               interior_iterations, interior_neighbourhood, settle_compliance,
+                                               lost_factor);
           validate(s);
           return s;
         }),
@@ -108,7 +111,7 @@ void bind_cd_settings(py::module_& m) {
         py::arg("interior_states_retries") = d.interior_states_retries,
         py::arg("interior_iterations") = d.interior_max_iterations,
         py::arg("interior_neighbourhood") = d.interior_neighbourhood,
-        py::arg("settle_compliance") = d.settle_compliance);
+        py::arg("settle_compliance") = d.settle_compliance, py::arg("lost_factor") = d.lost_factor);
   c.def_property(
       "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
       [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
@@ -144,6 +147,10 @@ void bind_cd_settings(py::module_& m) {
   checked_field(c, "settle_compliance", &CdPathSettings::settle_compliance,
                 "the compliance at or below which a path ends at its first exact solution, >= 0 (0: never; "
                 "--cd-settle-compliance; docs/probe.md, \"Settling at an exact solution\")");
+  checked_field(c, "lost_factor", &CdPathSettings::lost_factor,
+                "drop a path whose forces at the full opening have a residual above this factor times its "
+                "compliance (at least 1e-3) in g, >= 0 (0: off; --cd-lost-factor; docs/probe.md, \"Paths that "
+                "lose their digits\")");
   c.def("__repr__", &repr);
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });

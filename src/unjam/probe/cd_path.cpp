@@ -718,6 +718,13 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
   // (StepPath::set_compliance); the lowest residual met is kept.
   sol.f = path.forces(x0 + x1);
   sol.residual = cd_step_residual(pb, sol.f);
+  // Forces that have lost their digits (CdPathSettings::lost_factor) are not lowered.
+  if (ps.lost_factor > 0.0 &&
+      !(sol.residual.max() <= ps.lost_factor * std::max(compliance_of(path.compliance()), 1e-3))) {
+    stats.failure = "lost";
+    stats.factorizations += path.factorizations();
+    return CdStepSolution{};
+  }
   std::vector<State> states = path.states();  // those of sol.f
   Eigen::VectorXd f_latest = sol.f;  // the latest solution (the next proximal step's reference)
   // Lowered far enough: a residual of 1e-3 of the exact one, or an exact one at or below the
@@ -931,6 +938,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
                 std::to_string(kMaxPathResidual) + "] g (got " + std::to_string(ps.accept_residual) + ")");
   if (!(ps.settle_compliance >= 0.0 && std::isfinite(ps.settle_compliance)))
     throw Error("cd path: settle_compliance must be >= 0 and finite (got " + std::to_string(ps.settle_compliance) + ")");
+  if (!(ps.lost_factor >= 0.0 && std::isfinite(ps.lost_factor)))
+    throw Error("cd path: lost_factor must be >= 0 and finite (got " + std::to_string(ps.lost_factor) + ")");
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
@@ -1001,6 +1010,9 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         best_stats = stats;
       }
       if (enough()) break;
+      // A restart below a path that lost its digits would be stiffer still: the next softer
+      // start is followed instead (CdPathSettings::lost_factor).
+      if (soft && stats.failure == "lost") break;
       // Where the static network sticks, a restart's path is the one before it scaled: it
       // stops at lambda_max proportional to its compliance (forces ~ lambda / compliance; docs/
       // probe.md, "Where the path starts"). Two restarts in a row so, and the ones below would

@@ -140,6 +140,14 @@ struct CdPathSettings {
   // budget; at mu = 1 a path stopped at 1e-5 returns another of the step's exact solutions on
   // some probes (docs/probe.md, "Settling at an exact solution").
   double settle_compliance = 0.0;
+  // A path whose forces at the full opening have a residual above lost_factor x max(its
+  // compliance, 1e-3) g has lost its digits: its solves went through nearly singular state
+  // sets (a path that has not shows the compliance's own displacement, ~0.1-1.3 g per unit of
+  // compliance). It is then no solution and is not lowered (failure "lost"), and the compliant
+  // continuation does not restart below it (a stiffer restart loses more) but goes on to its
+  // next softer start (`--cd-lost-factor`; docs/probe.md, "Paths that lose their digits").
+  // 0 (the default): off, such a path is lowered and restarted below as any other.
+  double lost_factor = 0.0;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -190,7 +198,8 @@ struct CdPathStats {
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual),
                               // "budget" (max_probe_pieces spent), "stall" (the path from the
-                              // interior point's states stopped gaining ground)
+                              // interior point's states stopped gaining ground), "lost" (its
+                              // forces at the full opening lost their digits; lost_factor)
   std::vector<CdPathAttempt> paths;  // every path followed, in order (paths.size() == attempts)
 };
 

@@ -228,6 +228,8 @@ void validate(const CdPathSettings& cd) {
   }
   if (!(cd.settle_compliance >= 0.0 && std::isfinite(cd.settle_compliance)))
     throw Error("--cd-settle-compliance must be >= 0 and finite (got " + std::to_string(cd.settle_compliance) + ")");
+  if (!(cd.lost_factor >= 0.0 && std::isfinite(cd.lost_factor)))
+    throw Error("--cd-lost-factor must be >= 0 and finite (got " + std::to_string(cd.lost_factor) + ")");
   if (!(cd.interior_states_pieces >= 0.0 && std::isfinite(cd.interior_states_pieces)))
     throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
                 std::to_string(cd.interior_states_pieces) + ")");
@@ -261,6 +263,8 @@ void validate(const CampaignSettings& s) {
     throw Error(std::string("--cd-accept-residual applies to the cd method, not to ") + method_name(s.method));
   if (s.cd.settle_compliance > 0.0 && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-settle-compliance applies to the cd method, not to ") + method_name(s.method));
+  if (s.cd.lost_factor > 0.0 && s.method != ProbeMethod::kCd)
+    throw Error(std::string("--cd-lost-factor applies to the cd method, not to ") + method_name(s.method));
   if (!(s.nlgs.window >= 0.0 && std::isfinite(s.nlgs.window)))
     throw Error("--window must be >= 0 and finite (mean diameters; got " + std::to_string(s.nlgs.window) + ")");
   if (s.nlgs.window > 0.0 && s.method != ProbeMethod::kCd && s.method != ProbeMethod::kLemke)
@@ -516,6 +520,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
       j["cd_accept_residual"] = s.cd.accept_residual;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kCd && s.cd.settle_compliance > 0.0)
       j["cd_settle_compliance"] = s.cd.settle_compliance;  // recorded where set, as cd_start
+    if (s.method == ProbeMethod::kCd && s.cd.lost_factor > 0.0)
+      j["cd_lost_factor"] = s.cd.lost_factor;  // recorded where set, as cd_start
     if (s.max_inertia > 0.0) j["max_inertia_F0"] = s.max_inertia;  // recorded where set, as cd_start
     if (s.nlgs.window > 0.0) j["window_d"] = s.nlgs.window;            // recorded where set, as cd_start
     if (s.method == ProbeMethod::kNlgs) {
@@ -533,7 +539,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
       "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
       "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
-      "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
+      "cd_lost_factor", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
   for (const auto& [key, value] : j.items())
     if (kKnown.count(key) == 0) throw Error(name + " have a setting this unjam does not know: '" + key + "'");
   CampaignSettings s = campaign_settings_for(p);
@@ -564,6 +570,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
         s.cd.max_probe_pieces = integer("cd_max_pieces", 0);
         s.cd.accept_residual = number("cd_accept_residual", CdPathSettings{}.accept_residual);
         s.cd.settle_compliance = number("cd_settle_compliance", 0.0);
+        s.cd.lost_factor = number("cd_lost_factor", 0.0);
       }
       if (has_continuation(s)) {
         s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));
