@@ -68,8 +68,7 @@ bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b) { return f
 
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
-                           int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                           double settle_compliance, double lost_factor) {
+                           int interior_states_retries, int interior_iterations, double interior_neighbourhood) {
   CdPathSettings s;
   s.start = cd_start_from_name(start);
   s.compliant_start = compliant_start;
@@ -81,8 +80,6 @@ CdPathSettings cd_settings(const std::string& start, double compliant_start, int
   s.interior_states_retries = interior_states_retries;
   s.interior_max_iterations = interior_iterations;
   s.interior_neighbourhood = interior_neighbourhood;
-  s.settle_compliance = settle_compliance;
-  s.lost_factor = lost_factor;
   return s;
 }
 
@@ -96,10 +93,11 @@ void bind_cd_settings(py::module_& m) {
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood,
                     double settle_compliance, double lost_factor) {
-          const CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
-                                               interior_states_pieces, interior_states_stall, interior_states_retries,
-                                               interior_iterations, interior_neighbourhood, settle_compliance,
-                                               lost_factor);
+          CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
+                                         interior_states_pieces, interior_states_stall, interior_states_retries,
+                                         interior_iterations, interior_neighbourhood);
+          s.settle_compliance = settle_compliance;
+          s.lost_factor = lost_factor;
           validate(s);
           return s;
         }),

@@ -163,8 +163,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd = cd_settings(cd_start, cd_compliant_start, cd_softer_starts, cd_max_pieces, cd_accept_residual,
                                   cd_interior_states_pieces, cd_interior_states_stall, cd_interior_states_retries,
-                                  cd_interior_iterations, cd_interior_neighbourhood, CdPathSettings{}.settle_compliance,
-                                  CdPathSettings{}.lost_factor);
+                                  cd_interior_iterations, cd_interior_neighbourhood);
   if (typed) {  // cd=unjam.CdSettings(...): the keywords must then be left at their defaults
     if (!same_cd_fields(cd, CdPathSettings{}))
       throw Error("give the cd settings either as cd=unjam.CdSettings(...) or as cd_* keywords, not both");
