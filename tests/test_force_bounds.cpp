@@ -15,6 +15,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/lp/force_lp.hpp"
 #include "unjam/lp/rank.hpp"
 #include "unjam/packing/packing_io.hpp"
 
@@ -285,6 +286,40 @@ TEST(ForceBounds, InfeasibleSystemIsReported) {
   } catch (const unjam::Error& e) {
     EXPECT_NE(std::string(e.what()).find("no admissible force network"), std::string::npos);
   }
+}
+
+// Below the friction coefficient at which the packing can still be held (p500-mu0.1: between
+// 0.097 and 0.0975, by dual simplex) the admissible set is empty. CLP's barrier then ends
+// "optimal" at points whose grains are out of balance by ~1e-4 of their forces, which passed a
+// check against max |rhs| (the pressure row's 2 V P_ext) and gave intervals with fn_min > fn_max
+// (docs/ensemble.md, "The LP"). Both methods must report the empty set, and just above the
+// threshold find the same intervals.
+TEST(ForceBounds, BelowThePackingsOwnThresholdBothMethodsFindNoNetwork) {
+  Packing p = unjam::read_packing(fixture_dir("p500-mu0.1"));
+  const auto contacts = unjam::select_contacts(p);
+  for (const double mu : {0.095, 0.096, 0.097}) {
+    p.meta.contact.mu = mu;
+    const auto sys = unjam::build_equilibrium_system(p, contacts);
+    for (const auto method : {unjam::LpMethod::barrier, unjam::LpMethod::simplex}) {
+      try {
+        unjam::ForceLP lp(sys, method);
+        FAIL() << "mu = " << mu << ": expected no admissible network";
+      } catch (const unjam::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("no admissible force network"), std::string::npos) << e.what();
+      }
+    }
+  }
+  p.meta.contact.mu = 0.0975;
+  const auto sys = unjam::build_equilibrium_system(p, contacts);
+  unjam::ForceLP barrier(sys, unjam::LpMethod::barrier), simplex(sys, unjam::LpMethod::simplex);
+  const double F0 = p.force_unit();
+  for (int k = 0; k < sys.num_contacts(); k += 97) {
+    const double lo = barrier.min_fn(k), hi = barrier.max_fn(k);
+    EXPECT_LE(lo, hi) << k;
+    EXPECT_NEAR(lo, simplex.min_fn(k), 1e-7 * F0) << k;
+    EXPECT_NEAR(hi, simplex.max_fn(k), 1e-7 * F0) << k;
+  }
+  EXPECT_EQ(barrier.simplex_finishes(), 0);
 }
 
 // A run stopped every 40 LPs (alternately on 1 and 2 threads) and resumed from its checkpoint

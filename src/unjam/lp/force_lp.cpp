@@ -1,5 +1,6 @@
 #include "unjam/lp/force_lp.hpp"
 
+#include <cmath>
 #include <string>
 
 #include <coin/ClpSimplex.hpp>
@@ -29,6 +30,33 @@ std::string clp_status_text(int status) {
   }
 }
 
+// Whether the barrier's point y is an admissible network: y >= -tolerance, and every row of
+// A_y y = rhs holds to kAdmissibleRowResidual of its own scale (|A_y| |y| + |rhs|)_i. A grain's
+// balance row is of the order of its forces (F0) and the pressure row of 2 V P_ext (~1e3 F0 at
+// 1000 disks), so a check against max |rhs| alone would pass a point whose grains are out of
+// balance by 1e-3 F0. The barrier returns such points where the admissible set is empty or
+// nearly so and calls them optimal (docs/ensemble.md, "The LP").
+bool admissible_point(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
+                      const Eigen::VectorXd& y, double tolerance) {
+  if (!(y.minCoeff() >= -tolerance)) return false;
+  const Eigen::VectorXd residual = Ay * y - rhs;
+  // A row's scale, at least the mean cone coordinate (a typical force): a grain that carries
+  // almost no force has a row scale near 0 and a residual at round-off of the others.
+  const double floor = y.cwiseAbs().mean();
+  const Eigen::VectorXd scale = (Ay.cwiseAbs() * y.cwiseAbs() + rhs.cwiseAbs()).cwiseMax(floor);
+  for (Eigen::Index i = 0; i < residual.size(); ++i)
+    if (!(std::abs(residual[i]) <= kAdmissibleRowResidual * scale[i])) return false;
+  return true;
+}
+
+Error no_admissible_network(const EquilibriumSystem& system) {
+  return Error("no admissible force network: no forces satisfy the balance of the " +
+               std::to_string(system.grains.size()) + " grains with the " +
+               std::to_string(system.num_contacts()) +
+               " contacts, P_in = P_ext, fn >= 0 and |ft| <= mu fn (mu = " + std::to_string(system.mu) +
+               "); is the packing static and its contact list complete (try a larger --gap-tol)?");
+}
+
 }  // namespace
 
 void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay,
@@ -47,38 +75,32 @@ void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& A
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
     : system_(&system),
       method_(method),
+      tolerance_(tolerance),
       min_model_(std::make_unique<ClpSimplex>()),
       per_contact_(cone_columns_per_contact(system.mu)) {
   if (system.num_contacts() == 0)
     throw Error("no admissible force network: the packing has no contact to carry P_ext");
-  const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
+  Ay_ = cone_matrix(system);
+  const Eigen::SparseMatrix<double>& Ay = Ay_;
   const int cols = static_cast<int>(Ay.cols());
   ClpSimplex& model = *min_model_;
   load_admissible_set(model, Ay, system.rhs, tolerance);
   // A first admissible network. The barrier method needs no basis and finds one fastest
   // (0.2 s against 5 s of dual simplex at 2000 disks); the simplex method needs the basis,
   // and a zero objective is dual feasible: dual simplex. The barrier may call an empty set
-  // optimal, so its point is checked (A_y y = rhs to 1e-6 |rhs|, y >= -tolerance); when it
-  // fails, dual simplex decides, which classifies an empty set reliably.
+  // optimal, so its point is checked (admissible_point); when it fails, dual simplex decides,
+  // which classifies an empty set reliably.
   bool admissible = false;
   if (method == LpMethod::barrier) {
     const BarrierEnd end = barrier_.solve(model);
     iterations_ += model.numberIterations();
     const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), cols);
-    admissible = end != BarrierEnd::failed && y.minCoeff() >= -tolerance &&
-                 (Ay * y - system.rhs).lpNorm<Eigen::Infinity>() <=
-                     1e-6 * system.rhs.lpNorm<Eigen::Infinity>();
+    admissible = end != BarrierEnd::failed && admissible_point(Ay, system.rhs, y, tolerance_);
   }
   if (!admissible) {
     model.dual();
     iterations_ += model.numberIterations();
-    if (model.status() == 1)
-      throw Error("no admissible force network: no forces satisfy the balance of the " +
-                  std::to_string(system.grains.size()) + " grains with the " +
-                  std::to_string(system.num_contacts()) +
-                  " contacts, P_in = P_ext, fn >= 0 and |ft| <= mu fn (mu = " +
-                  std::to_string(system.mu) + "); is the packing static and its contact "
-                  "list complete (try a larger --gap-tol)?");
+    if (model.status() == 1) throw no_admissible_network(system);
     if (model.status() != 0)
       throw Error("force bounds LP: first solve " + clp_status_text(model.status()));
   }
@@ -89,6 +111,8 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
 ForceLP::ForceLP(const ForceLP& other)
     : system_(other.system_),
       method_(other.method_),
+      tolerance_(other.tolerance_),
+      Ay_(other.Ay_),
       barrier_(other.barrier_),
       min_model_(std::make_unique<ClpSimplex>(*other.min_model_)),
       max_model_(other.max_model_ ? std::make_unique<ClpSimplex>(*other.max_model_) : nullptr),
@@ -122,13 +146,21 @@ double ForceLP::optimize(int k, double direction) {
     iterations_ += model.numberIterations();
     last_loosened_ = end == BarrierEnd::optimal_loosened;
     loosened_solves_ += last_loosened_;
-    solved = end != BarrierEnd::failed;
+    // An optimum the barrier reports at a point that is not admissible is a failure too.
+    solved = end != BarrierEnd::failed &&
+             admissible_point(Ay_, system_->rhs,
+                              Eigen::Map<const Eigen::VectorXd>(model.primalColumnSolution(), model.numberColumns()),
+                              tolerance_);
+    simplex_finishes_ += !solved;
   }
   if (!solved) {  // the simplex method, or a barrier failure finished by simplex
     model.primal();
     iterations_ += model.numberIterations();
     solved = model.status() == 0;
   }
+  // An empty set that the first solve took for admissible (dual simplex within its tolerance
+  // from the barrier's point) shows here.
+  if (model.status() == 1) throw no_admissible_network(*system_);
   if (!solved)
     throw Error("force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
                 " of fn of contact " + std::to_string(k) + " " +

@@ -41,6 +41,13 @@ std::vector<ContactState> contact_states(const ForceNetwork& network, double mu,
 //            contact grows about like N^2.
 enum class LpMethod { barrier, simplex };
 
+// A barrier point is admissible where y >= -tolerance and every row of A_y y = rhs holds to this
+// fraction of its own scale, (|A_y| |y| + |rhs|)_i but at least the mean |y| (force_lp.cpp,
+// admissible_point). Measured: the barrier's optima on admissible sets at most 4e-9; the points
+// it calls optimal on empty sets 2e-5 to 3e-3 (docs/ensemble.md, "The LP"). A point that fails
+// is finished by simplex, which decides.
+inline constexpr double kAdmissibleRowResidual = 1e-6;
+
 // Loads the admissible set into `model` in cone coordinates: columns y >= 0 (the Coulomb
 // cone and fn >= 0), rows A_y y = rhs (Ay = cone_matrix(system)), a zero objective, no log,
 // primal and dual tolerance `tolerance` (see ForceLP). The model ForceLP solves.
@@ -76,12 +83,17 @@ class ForceLP {
   // every solve of this object (a copy starts from 0), and whether the last one did.
   long long loosened_solves() const { return loosened_solves_; }
   bool last_solve_loosened() const { return last_loosened_; }
+  // Barrier solves whose point was not admissible (or that failed) and were finished by primal
+  // simplex, over every solve of this object after the first (a copy starts from 0).
+  long long simplex_finishes() const { return simplex_finishes_; }
 
  private:
   double optimize(int k, double direction);
 
   const EquilibriumSystem* system_;
   LpMethod method_;
+  double tolerance_;
+  Eigen::SparseMatrix<double> Ay_;  // cone_matrix(*system_): the rows A_y y = rhs
   BarrierSolver barrier_;  // keeps the Cholesky analysis of A_y across solves
   std::unique_ptr<ClpSimplex> min_model_, max_model_;  // the same LP, one basis per sense
   ClpSimplex* last_ = nullptr;                         // model of the last solve
@@ -90,6 +102,7 @@ class ForceLP {
   int min_objective_ = -1, max_objective_ = -1;
   long long iterations_ = 0;
   long long loosened_solves_ = 0;
+  long long simplex_finishes_ = 0;
   bool last_loosened_ = false;
 };
 
