@@ -2,11 +2,14 @@
 // against the fixture's independent ones (HiGHS, bounds-reference.csv), both samplers' ranges
 // inside them, F_crit of the LP probe equal to fn_max on every force-carrying contact, and
 // ensemble.json against ensemble.csv (and its command line); a fixed seed gives the same
-// bytes; --help of ensemble and bounds gives the defaults.
+// bytes; --help of ensemble and bounds gives the defaults; `unjam threshold` brackets the
+// friction threshold.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli_fixture_checks.hpp"
 #include "cli_run.hpp"
@@ -105,6 +108,56 @@ TEST_F(CliEnsemble, OneSamplerWithoutProbesWritesOnlyItsColumns) {
   EXPECT_FALSE(j["methods"].contains("walk"));
   EXPECT_EQ(j["probe"]["method"], "none");
   EXPECT_FALSE(j["probe"].contains("contacts_probed"));
+}
+
+// `unjam threshold` on p50-mu0.1 (its threshold is 0.048): the bracket in the JSON and the
+// report, the parameters and the command; continued from a bracket; bad brackets, options and
+// a missing packing are refused with nothing written.
+TEST_F(CliEnsemble, ThresholdBracketsTheFrictionThreshold) {
+  const testing::ToolRun r = run_tool("threshold " + q(dir_) + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = read_json_file(dir_ / "friction_threshold.json");
+  const double lo = j["mu_s_low"].get<double>(), hi = j["mu_s_high"].get<double>();
+  EXPECT_GT(lo, 0.048);
+  EXPECT_LT(hi, 0.0482);
+  EXPECT_LE(hi - lo, 1e-4 + 1e-15);
+  EXPECT_EQ(j["mu"].get<double>(), 0.1);
+  EXPECT_DOUBLE_EQ(j["mu_s_over_mu"].get<double>(), hi / 0.1);
+  EXPECT_EQ(j["lps"].get<int>(), 12);
+  EXPECT_EQ(j["contacts_used"].get<int>(), 81);
+  EXPECT_EQ(j["parameters"]["rel_tol"].get<double>(), 1e-3);
+  EXPECT_TRUE(j["parameters"]["between"].is_null());
+  EXPECT_NE(j["command"].get<std::string>().find("threshold"), std::string::npos);
+  EXPECT_FALSE(j["program_version"].get<std::string>().empty());
+  EXPECT_NE(r.output.find("friction threshold mu_s in ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("mu_s / mu = 0.48"), std::string::npos) << r.output;
+  // Continued from a coarser bracket: the same end.
+  const fs::path out = dir_ / "from.json";
+  const testing::ToolRun c = run_tool("threshold " + q(dir_) + " --between 0.025 0.05 --out " + q(out));
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  const nlohmann::json k = read_json_file(out);
+  EXPECT_EQ(k["mu_s_high"].get<double>(), hi);
+  EXPECT_EQ(k["mu_s_low"].get<double>(), lo);
+  EXPECT_NE(c.output.find("threshold: 1 / "), std::string::npos) << "progress lines: " << c.output;
+  const fs::path none = dir_ / "none.json";
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--between 0.05 0.1", "not empty at mu_low = 0.05"},
+      {"--between 0.01 0.04", "empty at mu_high = 0.04"},
+      {"--between 0.1 0.05", "0 <= mu_low < mu_high"},
+      {"--between 0.1", "--between"},
+      {"--rel-tol 1", "--rel-tol must be in (0, 1)"},
+      {"--rel-tol 0", "must be a finite number > 0"}};
+  for (const auto& [args, phrase] : bad) {
+    const testing::ToolRun b = run_tool("threshold " + q(dir_) + " " + args + " --out " + q(none));
+    EXPECT_EQ(b.exit_code, 1) << args << "\n" << b.output;
+    EXPECT_NE(b.output.find(phrase), std::string::npos) << args << "\n" << b.output;
+    EXPECT_LT(b.output.size(), 400u) << b.output;
+    EXPECT_FALSE(fs::exists(none)) << args;
+  }
+  const testing::ToolRun missing = run_tool("threshold " + q(dir_ / "missing") + " --out " + q(none));
+  EXPECT_EQ(missing.exit_code, 1) << missing.output;
+  EXPECT_NE(missing.output.find("unjam: error:"), std::string::npos) << missing.output;
+  EXPECT_FALSE(fs::exists(none));
 }
 
 // --help gives every option's default (CLI11 prints it after the type: "--samples INT=20000").

@@ -1,6 +1,7 @@
 // Exact per-contact normal-force intervals by LP: fixtures against an independent LP (HiGHS),
 // hand-made systems with known answers, monotonicity in mu, runs stopped and resumed through
-// their checkpoint (campaign/bounds_checkpoint), the command-line tool.
+// their checkpoint (campaign/bounds_checkpoint), the command-line tool; the friction threshold
+// (ensemble/friction_threshold) against the LP's emptiness by both methods.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/ensemble/friction_threshold.hpp"
 #include "unjam/lp/force_lp.hpp"
 #include "unjam/lp/rank.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -320,6 +322,112 @@ TEST(ForceBounds, BelowThePackingsOwnThresholdBothMethodsFindNoNetwork) {
     EXPECT_NEAR(hi, simplex.max_fn(k), 1e-7 * F0) << k;
   }
   EXPECT_EQ(barrier.simplex_finishes(), 0);
+}
+
+// The friction threshold of p500-mu0.1 lies between 0.097 and 0.0975 (the test above: no
+// network at 0.095-0.097 by both methods, one at 0.0975). The bisection must bracket it to
+// 1e-3 mu in 12 LPs, with no network at its lower end and one at its upper end by the other
+// LP method too (the barrier with the row check).
+TEST(FrictionThreshold, BracketsThePackingsOwnThreshold) {
+  const Packing p = unjam::read_packing(fixture_dir("p500-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  std::vector<std::pair<double, double>> seen;
+  unjam::FrictionThresholdOptions o;
+  o.progress = [&](int done, int total, double lo, double hi) {
+    EXPECT_EQ(done, static_cast<int>(seen.size()) + 1);
+    EXPECT_EQ(total, 12);
+    seen.emplace_back(lo, hi);
+  };
+  const unjam::FrictionThreshold t = unjam::friction_threshold(sys, o);
+  EXPECT_EQ(t.mu, 0.1);
+  EXPECT_GE(t.mu_low, 0.097);
+  EXPECT_LE(t.mu_high, 0.0975);
+  EXPECT_LE(t.mu_high - t.mu_low, 1e-4 + 1e-15);
+  EXPECT_GT(t.mu_high - t.mu_low, 0.5e-4) << "no more LPs than needed";
+  EXPECT_EQ(t.lps, 12);
+  ASSERT_EQ(seen.size(), 12u);
+  for (std::size_t i = 1; i < seen.size(); ++i) {  // nested brackets
+    EXPECT_GE(seen[i].first, seen[i - 1].first);
+    EXPECT_LE(seen[i].second, seen[i - 1].second);
+  }
+  EXPECT_EQ(seen.back(), std::make_pair(t.mu_low, t.mu_high));
+  for (const double mu : {t.mu_low, t.mu_high}) {
+    auto at = sys;
+    at.mu = mu;
+    EXPECT_EQ(unjam::has_admissible_network(at), mu == t.mu_high) << mu;
+    bool built = true;
+    try {
+      unjam::ForceLP barrier(at, unjam::LpMethod::barrier);
+    } catch (const unjam::Error&) {
+      built = false;
+    }
+    EXPECT_EQ(built, mu == t.mu_high) << mu;
+  }
+}
+
+// On p50-mu0.1 (threshold 0.048): from a bracket given, the bisection ends on the bracket it
+// reaches from [0, mu] (there it passes (0.025, 0.05] after 4 LPs, so 2 fewer); a bracket
+// whose ends are not as stated is refused; a run stopped on request throws Cancelled.
+TEST(FrictionThreshold, FromABracketToTheSameEnd) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  const unjam::FrictionThreshold t = unjam::friction_threshold(sys);
+  EXPECT_EQ(t.lps, 12);
+  unjam::FrictionThresholdOptions from;
+  from.mu_low = 0.025;
+  from.mu_high = 0.05;
+  const unjam::FrictionThreshold u = unjam::friction_threshold(sys, from);
+  EXPECT_EQ(u.mu_low, t.mu_low);
+  EXPECT_EQ(u.mu_high, t.mu_high);
+  EXPECT_EQ(u.lps, 10);
+  const auto refused = [&](double lo, double hi, const char* phrase) {
+    unjam::FrictionThresholdOptions b;
+    b.mu_low = lo;
+    b.mu_high = hi;
+    try {
+      unjam::friction_threshold(sys, b);
+      ADD_FAILURE() << lo << ", " << hi << ": expected an error";
+    } catch (const unjam::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(phrase), std::string::npos) << e.what();
+    }
+  };
+  refused(0.049, 0.1, "not empty at mu_low");
+  refused(0.01, 0.047, "empty at mu_high");
+  refused(0.1, 0.05, "0 <= mu_low < mu_high");
+  // Stopped on request before its fourth LP.
+  unjam::FrictionThresholdOptions stop;
+  int polls = 0;
+  stop.should_stop = [&polls] { return ++polls > 3; };
+  EXPECT_THROW(unjam::friction_threshold(sys, stop), unjam::Cancelled);
+  EXPECT_EQ(polls, 4);
+}
+
+// lattice16 (a triangular lattice: every contact's force along its normal) needs no friction:
+// mu_s = 0 after two LPs; read without friction, after one. A packing read far below its
+// threshold has no network at its own mu: an error, as for `unjam bounds`.
+TEST(FrictionThreshold, ZeroWhereNoFrictionIsNeededAndAnErrorWithoutANetwork) {
+  Packing p = unjam::read_packing(fixture_dir("lattice16"));
+  auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  unjam::FrictionThreshold t = unjam::friction_threshold(sys);
+  EXPECT_EQ(t.mu_low, 0.0);
+  EXPECT_EQ(t.mu_high, 0.0);
+  EXPECT_EQ(t.lps, 2);
+  sys.mu = 0.0;
+  t = unjam::friction_threshold(sys);
+  EXPECT_EQ(t.mu_high, 0.0);
+  EXPECT_EQ(t.lps, 1);
+  unjam::FrictionThresholdOptions bad;
+  bad.rel_tol = 0.0;
+  EXPECT_THROW(unjam::friction_threshold(sys, bad), unjam::Error);
+  Packing q = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  q.meta.contact.mu = 0.04;  // its threshold is 0.048 (docs/ensemble.md, "The friction threshold")
+  try {
+    unjam::friction_threshold(unjam::build_equilibrium_system(q, unjam::select_contacts(q)));
+    ADD_FAILURE() << "expected no admissible network at mu = 0.04";
+  } catch (const unjam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no admissible force network at the packing's own mu"), std::string::npos)
+        << e.what();
+  }
 }
 
 // A run stopped every 40 LPs (alternately on 1 and 2 threads) and resumed from its checkpoint

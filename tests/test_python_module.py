@@ -193,6 +193,21 @@ def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
     assert np.all(b["fn_min"] <= b["fn"] + 1e-9) and np.all(b["fn"] <= b["fn_max"] + 1e-9)
 
 
+def test_friction_threshold_equals_tool(tmp_path, p50):
+    """unjam.friction_threshold gives `unjam threshold`'s bracket, to the bit, and from a
+    bracket the same end; a bracket whose ends are not as stated raises unjam.Error."""
+    tool("threshold", FIXTURE, "--quiet", "--out", tmp_path / "t.json")
+    j = json.loads((tmp_path / "t.json").read_text())
+    t = unjam.friction_threshold(p50)
+    assert (t["mu_s_low"], t["mu_s_high"], t["lps"]) == (j["mu_s_low"], j["mu_s_high"], j["lps"])
+    assert t["mu"] == 0.1 and t["contacts"] == j["contacts_used"]
+    assert 0.048 < t["mu_s_low"] < t["mu_s_high"] <= t["mu_s_low"] + 1e-4 + 1e-15
+    u = unjam.friction_threshold(p50, between=(0.025, 0.05))
+    assert (u["mu_s_low"], u["mu_s_high"]) == (t["mu_s_low"], t["mu_s_high"])
+    with pytest.raises(unjam.Error, match="not empty at mu_low"):
+        unjam.friction_threshold(p50, between=(0.049, 0.1))
+
+
 def test_bounds_report_their_progress_and_a_callbacks_exception_stops_them(tmp_path, p50):
     """progress= gets a dict at the first LP, every 2 s and at the end (done = total = 2 N_c);
     an exception it raises stops the LPs as Ctrl-C does: raised, the checkpoint saved, and

@@ -268,10 +268,7 @@ void add_bounds_command(CLI::App& app) {
                 "admissible force networks (LP)");
   cmd->add_option("DIR", opt->dir, "packing directory")->required();
   cmd->add_option("--out", opt->out, "CSV output (default DIR/bounds.csv; JSON beside it)");
-  cmd->add_option("--gap-tol", opt->gap_tol, "touching contacts: gap < gap-tol (R_max)")
-      ->capture_default_str()->check(non_negative_number());
-  cmd->add_option("--fn-tol", opt->fn_tol, "force-carrying contacts: fn > fn-tol F0")
-      ->capture_default_str()->check(non_negative_number());
+  add_contact_selection_options(cmd, opt->gap_tol, opt->fn_tol);
   cmd->add_option("--threads", opt->threads, "OpenMP threads (0: all cores)")
       ->check(non_negative_number())
       ->capture_default_str();

@@ -262,10 +262,7 @@ void add_ensemble_command(CLI::App& app) {
   cmd->add_option("--probe-velocity-tol", opt->settings.probe_velocity_tol,
                   "nlgs probe convergence: max |dU| per sweep below this times g / dt")
       ->capture_default_str()->check(positive_number());
-  cmd->add_option("--gap-tol", opt->settings.gap_tol, "touching contacts: gap < gap-tol (R_max)")
-      ->capture_default_str()->check(non_negative_number());
-  cmd->add_option("--fn-tol", opt->settings.fn_tol, "force-carrying contacts: fn > fn-tol F0")
-      ->capture_default_str()->check(non_negative_number());
+  add_contact_selection_options(cmd, opt->settings.gap_tol, opt->settings.fn_tol);
   cmd->add_option("--threads", opt->settings.threads,
                   "OpenMP threads for the LP bounds and the probes (0: all cores)")
       ->capture_default_str()->check(non_negative_number());

@@ -9,6 +9,7 @@ void add_pack_command(CLI::App& app);
 void add_info_command(CLI::App& app);
 void add_probe_command(CLI::App& app);
 void add_bounds_command(CLI::App& app);
+void add_threshold_command(CLI::App& app);
 void add_ensemble_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
 void add_export_command(CLI::App& app);

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   unjam::cli::add_info_command(app);
   unjam::cli::add_probe_command(app);
   unjam::cli::add_bounds_command(app);
+  unjam::cli::add_threshold_command(app);
   unjam::cli::add_ensemble_command(app);
   unjam::cli::add_merge_command(app);
   unjam::cli::add_export_command(app);

@@ -52,4 +52,11 @@ CLI::Validator non_negative_number() { return finite_number_check(false); }
 
 CLI::Validator positive_number() { return finite_number_check(true); }
 
+void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_tol) {
+  cmd->add_option("--gap-tol", gap_tol, "touching contacts: gap < gap-tol (R_max)")
+      ->capture_default_str()->check(non_negative_number());
+  cmd->add_option("--fn-tol", fn_tol, "force-carrying contacts: fn > fn-tol F0")
+      ->capture_default_str()->check(non_negative_number());
+}
+
 }  // namespace unjam::cli

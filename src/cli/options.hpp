@@ -11,4 +11,8 @@ CLI::Validator seed_value();            // 0 .. 18446744073709551615
 CLI::Validator non_negative_number();   // finite, >= 0
 CLI::Validator positive_number();       // finite, > 0
 
+// --gap-tol and --fn-tol of the commands over the admissible set (bounds, threshold, ensemble):
+// which contacts enter it (docs/ensemble.md, "Which contacts and rows enter").
+void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_tol);
+
 }  // namespace unjam::cli

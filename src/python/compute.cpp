@@ -9,6 +9,8 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include <pybind11/numpy.h>
@@ -24,6 +26,7 @@
 #include "unjam/core/error.hpp"
 #include "unjam/core/work_source.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
+#include "unjam/ensemble/friction_threshold.hpp"
 #include "unjam/lp/rank.hpp"
 #include "unjam/packing/export.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -340,6 +343,36 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   return d;
 }
 
+// unjam.friction_threshold: as `unjam threshold` (ensemble/friction_threshold). between: (LO, HI),
+// a bracket to start from. Ctrl-C stops it between two LPs (KeyboardInterrupt).
+py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol, double fn_tol,
+                               std::optional<std::pair<double, double>> between) {
+  FrictionThresholdOptions o;
+  o.rel_tol = rel_tol;
+  if (between) std::tie(o.mu_low, o.mu_high) = *between;
+  SignalPoll poll;
+  o.should_stop = [&poll] { return poll(); };
+  FrictionThreshold t;
+  int contacts = 0;
+  try {
+    py::gil_scoped_release release;
+    const EquilibriumSystem sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
+    contacts = sys.num_contacts();
+    t = friction_threshold(sys, o);
+  } catch (const Error&) {
+    poll.rethrow_if_interrupted();
+    throw;
+  }
+  py::dict d;
+  d["mu"] = t.mu;
+  d["mu_s_low"] = t.mu_low;
+  d["mu_s_high"] = t.mu_high;
+  d["contacts"] = contacts;
+  d["lps"] = t.lps;
+  d["seconds"] = t.seconds;
+  return d;
+}
+
 py::object stats(const Packing& p, double threshold) {
   if (!(threshold >= 0.0)) throw Error("threshold must be a non-negative number");
   const nlohmann::ordered_json j = stats_json(p, compute_packing_stats(p, threshold), threshold, "");
@@ -499,6 +532,13 @@ void bind_compute(py::module_& m) {
         "progress: a callable given a dict (done, total: LPs, the resumed ones counted as done; elapsed_s, "
         "eta_s: at this run's pace) every 2 s and at the end; an exception it raises "
         "stops the LPs as Ctrl-C does (the checkpoint saved) and is raised");
+  m.def("friction_threshold", &friction_threshold_of, py::arg("packing"), py::kw_only(), py::arg("rel_tol") = 1e-3,
+        py::arg("gap_tol") = 1e-9, py::arg("fn_tol") = 1e-9, py::arg("between") = py::none(),
+        "The friction threshold, as `unjam threshold`: a dict with mu (the packing's), mu_s_low and mu_s_high "
+        "(the smallest friction coefficient at which the contacts admit a force network lies in "
+        "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps and seconds. "
+        "Bisection on the LP's feasibility until the bracket is narrower than rel_tol x mu; between=(LO, HI) "
+        "starts from a bracket (no network at LO, one at HI; both checked). Ctrl-C stops it between LPs");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
         "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
   m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),

@@ -79,6 +79,16 @@ void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& A
   model.setDualTolerance(tolerance);
 }
 
+bool has_admissible_network(const EquilibriumSystem& system, double tolerance) {
+  if (system.num_contacts() == 0) return false;
+  ClpSimplex model;
+  load_admissible_set(model, cone_matrix(system), system.rhs, tolerance);
+  model.dual();
+  if (model.status() == 1) return false;
+  if (model.status() != 0) throw Error("admissible set LP: " + clp_status_text(model.status()));
+  return true;
+}
+
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
     : system_(&system),
       method_(method),

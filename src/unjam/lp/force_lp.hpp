@@ -54,6 +54,12 @@ inline constexpr double kAdmissibleRowResidual = 1e-6;
 void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay,
                          const Eigen::VectorXd& rhs, double tolerance);
 
+// Whether the admissible set of `system` has a point: dual simplex on a zero objective, the test
+// ForceLP's constructor falls back on, which classifies an empty set reliably (docs/ensemble.md,
+// "Why each row is checked on its own scale"). `tolerance` as for ForceLP. false for a system
+// without contacts; throws unjam::Error if CLP ends neither optimal nor infeasible.
+bool has_admissible_network(const EquilibriumSystem& system, double tolerance = 1e-9);
+
 // The LP over the admissible set of one system, re-solved for one objective after another.
 // Copyable: each copy owns its own CLP models and bases (one per thread).
 class ForceLP {
