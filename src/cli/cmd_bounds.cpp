@@ -205,11 +205,6 @@ std::filesystem::path checkpoint_path(const BoundsOptions& opt, int shard, int s
   return output_dir(opt) / (shards > 1 ? shard_file_name("bounds_checkpoint-shard", shard, shards) : "bounds_checkpoint.json");
 }
 
-// The admissible set of the packing's own contact model with touch_gap = --gap-tol.
-EquilibriumSystem bounds_system(const Packing& packing, const BoundsOptions& opt) {
-  return admissible_system(packing, with_touch_gap(packing.meta.contact, opt.gap_tol), opt.fn_tol);
-}
-
 void run_bounds(const BoundsOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   const auto [shard, shards] = opt.shard.empty() ? std::pair{0, 1} : parse_shard(opt.shard);
@@ -218,7 +213,7 @@ void run_bounds(const BoundsOptions& opt) {
   const Packing packing = read_packing(opt.dir);
   // Only the gathering rank of an MPI job writes.
   const std::unique_ptr<DirLock> lock = dist->gathers() ? lock_output(output_dir(opt), shard, shards) : nullptr;
-  const EquilibriumSystem sys = bounds_system(packing, opt);
+  const EquilibriumSystem sys = admissible_system(packing, opt.gap_tol, opt.fn_tol);
   BoundsRun run;
   run.t_build = seconds_since(t_start);
   ForceBoundsOptions lp = lp_options(opt, dist->gathers() ? sys.num_contacts() : 0);
@@ -297,7 +292,7 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
   opt.out = first.at("options").at("out").get<std::string>();
   const auto t_start = std::chrono::steady_clock::now();
   const Packing packing = read_packing(dir);
-  const EquilibriumSystem sys = bounds_system(packing, opt);
+  const EquilibriumSystem sys = admissible_system(packing, opt.gap_tol, opt.fn_tol);
   ForceBounds bounds;
   bounds.fn_min = bounds.fn_max = Eigen::VectorXd::Constant(sys.num_contacts(), std::nan(""));
   BoundsRun run;

@@ -108,8 +108,7 @@ void run_threshold(const ThresholdOptions& opt) {
   const std::filesystem::path out =
       opt.out.empty() ? std::filesystem::path(opt.dir) / "friction_threshold.json" : std::filesystem::path(opt.out);
   const DirLock lock(out.parent_path().empty() ? "." : out.parent_path(), command_line());
-  const EquilibriumSystem sys =
-      admissible_system(packing, with_touch_gap(packing.meta.contact, opt.gap_tol), opt.fn_tol);
+  const EquilibriumSystem sys = admissible_system(packing, opt.gap_tol, opt.fn_tol);
   FrictionThresholdOptions o;
   const FrictionThreshold r = bisect(opt, sys, o);
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

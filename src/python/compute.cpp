@@ -300,7 +300,7 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
     py::gil_scoped_release release;
     const ThreadCount count(threads);
     lp.threads = omp_get_max_threads();
-    sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
+    sys = admissible_system(p, gap_tol, fn_tol);
     LocalDistributor dist;
     const auto time_so_far = [&] {
       return saved->earlier() + one_run(elapsed(), dist.loads());
@@ -356,7 +356,7 @@ py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol,
   int contacts = 0;
   try {
     py::gil_scoped_release release;
-    const EquilibriumSystem sys = admissible_system(p, with_touch_gap(p.meta.contact, gap_tol), fn_tol);
+    const EquilibriumSystem sys = admissible_system(p, gap_tol, fn_tol);
     contacts = sys.num_contacts();
     t = friction_threshold(sys, o);
   } catch (const Error&) {

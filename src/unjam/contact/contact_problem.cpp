@@ -46,6 +46,10 @@ EquilibriumSystem admissible_system(const Packing& packing, const ContactModel& 
   return model_system(packing, select_contacts(packing, model, fn_tol), model);
 }
 
+EquilibriumSystem admissible_system(const Packing& packing, double gap_tol, double fn_tol) {
+  return admissible_system(packing, with_touch_gap(packing.meta.contact, gap_tol), fn_tol);
+}
+
 Eigen::VectorXd inverse_masses(const Packing& packing, const EquilibriumSystem& system,
                                const ContactModel& model) {
   Eigen::VectorXd inverse_mass(system.A.rows());

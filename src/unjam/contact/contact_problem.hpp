@@ -74,6 +74,10 @@ EquilibriumSystem model_system(const Packing& packing, const std::vector<int>& c
 EquilibriumSystem admissible_system(const Packing& packing, const ContactModel& model,
                                     double fn_tol = 1e-9);
 
+// The admissible set under the packing's own contact model with touch_gap = gap_tol: the set of
+// `unjam bounds` and `unjam threshold` (--gap-tol, --fn-tol) and of the Python module's.
+EquilibriumSystem admissible_system(const Packing& packing, double gap_tol, double fn_tol);
+
 // 1 / M per row of system.A (generalised coordinate): 1/m, 1/m, 2/m for (u_x, u_y, R theta)
 // of each grain of the system (I / R^2 = m / 2), 1 / (2 V model.M_lambda) for lambda dt of
 // the cell (docs/method.md, "The cell strain rate").

@@ -56,6 +56,17 @@ bool admissible_point(const Eigen::SparseMatrix<double>& Ay, const Eigen::Vector
   return true;
 }
 
+// Dual simplex on the model's zero objective (dual feasible from the start): whether the
+// admissible set has a point. CLP's status 1 (primal infeasible) says it has none, reliably where
+// the barrier's points are not (admissible_point); any other end but optimal throws, the message
+// starting with `what`.
+bool dual_finds_network(ClpSimplex& model, const std::string& what) {
+  model.dual();
+  if (model.status() == 1) return false;
+  if (model.status() != 0) throw Error(what + clp_status_text(model.status()));
+  return true;
+}
+
 Error no_admissible_network(const EquilibriumSystem& system) {
   return Error("no admissible force network: no forces satisfy the balance of the " +
                std::to_string(system.grains.size()) + " grains with the " +
@@ -83,10 +94,7 @@ bool has_admissible_network(const EquilibriumSystem& system, double tolerance) {
   if (system.num_contacts() == 0) return false;
   ClpSimplex model;
   load_admissible_set(model, cone_matrix(system), system.rhs, tolerance);
-  model.dual();
-  if (model.status() == 1) return false;
-  if (model.status() != 0) throw Error("admissible set LP: " + clp_status_text(model.status()));
-  return true;
+  return dual_finds_network(model, "admissible set LP: ");
 }
 
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
@@ -114,11 +122,9 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
     admissible = end != BarrierEnd::failed && admissible_point(Ay_, system.rhs, y, tolerance_);
   }
   if (!admissible) {
-    model.dual();
+    const bool found = dual_finds_network(model, "force bounds LP: first solve ");
     iterations_ += model.numberIterations();
-    if (model.status() == 1) throw no_admissible_network(system);
-    if (model.status() != 0)
-      throw Error("force bounds LP: first solve " + clp_status_text(model.status()));
+    if (!found) throw no_admissible_network(system);
   }
   if (method_ == LpMethod::simplex) max_model_ = std::make_unique<ClpSimplex>(model);
   last_ = &model;
