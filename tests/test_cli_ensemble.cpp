@@ -124,6 +124,7 @@ TEST_F(CliEnsemble, ThresholdBracketsTheFrictionThreshold) {
   EXPECT_EQ(j["mu"].get<double>(), 0.1);
   EXPECT_DOUBLE_EQ(j["mu_s_over_mu"].get<double>(), hi / 0.1);
   EXPECT_EQ(j["lps"].get<int>(), 12);
+  EXPECT_GT(j["simplex_iterations"].get<long long>(), 0);
   EXPECT_EQ(j["contacts_used"].get<int>(), 81);
   EXPECT_EQ(j["parameters"]["rel_tol"].get<double>(), 1e-3);
   EXPECT_TRUE(j["parameters"]["between"].is_null());

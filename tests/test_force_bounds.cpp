@@ -12,6 +12,8 @@
 #include <functional>
 #include <sstream>
 
+#include <coin/ClpSimplex.hpp>
+
 #include "unjam/campaign/bounds_checkpoint.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
@@ -363,6 +365,92 @@ TEST(FrictionThreshold, BracketsThePackingsOwnThreshold) {
     }
     EXPECT_EQ(built, mu == t.mu_high) << mu;
   }
+}
+
+// The admissibility test warm-started from the last LP's basis (the friction threshold's
+// bisection) gives the verdict of the test from scratch at every mu, on both sides of p500-mu0.1's
+// threshold (in (0.09707, 0.09717]) and near it; it uses the basis (an LP solved again from its own
+// optimal basis takes no iteration, and the warm LPs take fewer iterations in all); a basis of
+// another size (the frictionless LP has one cone column per contact) is ignored.
+TEST(FrictionThreshold, WarmStartedAdmissibilityAgreesWithTheColdOne) {
+  const Packing p = unjam::read_packing(fixture_dir("p500-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  unjam::SimplexBasis warm;
+  long long warm_iterations = 0, cold_iterations = 0;
+  auto at = sys;
+  for (const double mu : {0.1, 0.05, 0.0970, 0.0973, 0.2}) {
+    at.mu = mu;
+    unjam::SimplexBasis cold;
+    const bool found = unjam::has_admissible_network(at, 1e-9, warm);
+    EXPECT_EQ(found, unjam::has_admissible_network(at, 1e-9, cold)) << mu;
+    if (mu <= 0.097) EXPECT_FALSE(found) << mu;
+    if (mu >= 0.0973) EXPECT_TRUE(found) << mu;
+    EXPECT_EQ(warm.status.size(), static_cast<std::size_t>(2 * sys.num_contacts() + sys.rhs.size()));
+    warm_iterations += warm.iterations;
+    cold_iterations += cold.iterations;
+  }
+  EXPECT_LT(warm_iterations, cold_iterations);
+  ASSERT_EQ(at.mu, 0.2);
+  ASSERT_TRUE(unjam::has_admissible_network(at, 1e-9, warm));
+  EXPECT_EQ(warm.iterations, 0) << "solved again from its own optimal basis";
+  at.mu = 0.0;
+  EXPECT_FALSE(unjam::has_admissible_network(at, 1e-9, warm));
+  EXPECT_EQ(warm.status.size(), static_cast<std::size_t>(sys.num_contacts() + sys.rhs.size()));
+}
+
+// CLP's infeasibility ray below a packing's threshold is a certificate that the set is empty
+// (proves_no_admissible_network), whatever its sign or scale; the same ray, or a broken one,
+// never certifies a set that is not empty: just above p500-mu0.1's threshold (0.09707, 0.09717]
+// and at the packing's own mu.
+TEST(FrictionThreshold, AnEmptySetHasACertificateAndANonEmptyOneNone) {
+  const Packing p = unjam::read_packing(fixture_dir("p500-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  const auto cone = [&](double mu) {
+    auto at = sys;
+    at.mu = mu;
+    return unjam::cone_matrix(at);
+  };
+  const Eigen::SparseMatrix<double> below = cone(0.0970);
+  ClpSimplex model;
+  unjam::load_admissible_set(model, below, sys.rhs, 1e-9);
+  model.dual();
+  ASSERT_EQ(model.status(), 1);
+  double* ray = model.infeasibilityRay();
+  ASSERT_NE(ray, nullptr);
+  const Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(ray, sys.rhs.size());
+  delete[] ray;
+  EXPECT_TRUE(unjam::proves_no_admissible_network(below, sys.rhs, w));
+  EXPECT_TRUE(unjam::proves_no_admissible_network(below, sys.rhs, -3.0 * w));
+  for (const double mu : {0.0973, 0.1})
+    EXPECT_FALSE(unjam::proves_no_admissible_network(cone(mu), sys.rhs, w)) << mu;
+  Eigen::VectorXd without_pressure = w;
+  without_pressure[sys.pressure_row()] = 0.0;  // then w . rhs = 0: no certificate
+  EXPECT_FALSE(unjam::proves_no_admissible_network(below, sys.rhs, without_pressure));
+  Eigen::VectorXd one_grain_off = w;  // one balance row's multiplier changed
+  one_grain_off[0] += 1e3 * (1.0 + std::abs(w[0]));
+  EXPECT_FALSE(unjam::proves_no_admissible_network(below, sys.rhs, one_grain_off));
+}
+
+// Near the threshold of p1000-mu0.1 (in (0.093945, 0.094043]) CLP's dual simplex from scratch
+// ends infeasible at mu = 0.09397 without leaving a ray, with scaling and without: no
+// certificate. The verdict then comes from the elastic LP, whose duals prove the set empty; at
+// 0.09399 the set has a point. Both verdicts agree with the bisection's bracket.
+TEST(FrictionThreshold, AnEmptySetWithoutClpsRayIsProvedByTheElasticLp) {
+  const Packing p = unjam::read_packing(fixture_dir("p1000-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  auto at = sys;
+  at.mu = 0.09397;
+  const Eigen::SparseMatrix<double> Ay = unjam::cone_matrix(at);
+  ClpSimplex model;
+  unjam::load_admissible_set(model, Ay, sys.rhs, 1e-9);
+  model.dual();
+  EXPECT_EQ(model.status(), 1);
+  double* ray = model.infeasibilityRay();
+  EXPECT_EQ(ray, nullptr) << "CLP left a ray: this test no longer reaches the elastic LP";
+  delete[] ray;
+  EXPECT_FALSE(unjam::has_admissible_network(at));
+  at.mu = 0.09399;
+  EXPECT_TRUE(unjam::has_admissible_network(at));
 }
 
 // On p50-mu0.1 (threshold 0.048): from a bracket given, the bisection ends on the bracket it

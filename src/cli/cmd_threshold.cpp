@@ -67,6 +67,7 @@ nlohmann::ordered_json threshold_json(const ThresholdOptions& opt, const Packing
         {"between", opt.between.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(opt.between)},
         {"lp_tolerance", o.tolerance}, {"lp_method", "dual simplex"}}},
       {"lps", r.lps},
+      {"simplex_iterations", r.iterations},
       {"timings_s", {{"lp", r.seconds}, {"total", total_s}}},
   };
 }
@@ -117,7 +118,8 @@ void run_threshold(const ThresholdOptions& opt) {
   if (r.mu > 0.0) std::printf(", mu_s / mu = %.4g (mu = %.6g)", r.mu_high / r.mu, r.mu);
   std::printf("\ncontacts used      %d of %zu (grains with contacts %zu)\n", sys.num_contacts(),
               packing.contacts.size(), sys.grains.size());
-  std::printf("LPs                %d (dual simplex), %s\n", r.lps, format_duration(r.seconds).c_str());
+  std::printf("LPs                %d (dual simplex, %lld iterations), %s\n", r.lps, r.iterations,
+              format_duration(r.seconds).c_str());
   std::printf("wrote              %s\n", out.string().c_str());
 }
 

@@ -369,6 +369,7 @@ py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol,
   d["mu_s_high"] = t.mu_high;
   d["contacts"] = contacts;
   d["lps"] = t.lps;
+  d["simplex_iterations"] = t.iterations;
   d["seconds"] = t.seconds;
   return d;
 }
@@ -536,7 +537,7 @@ void bind_compute(py::module_& m) {
         py::arg("gap_tol") = 1e-9, py::arg("fn_tol") = 1e-9, py::arg("between") = py::none(),
         "The friction threshold, as `unjam threshold`: a dict with mu (the packing's), mu_s_low and mu_s_high "
         "(the smallest friction coefficient at which the contacts admit a force network lies in "
-        "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps and seconds. "
+        "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps, simplex_iterations and seconds. "
         "Bisection on the LP's feasibility until the bracket is narrower than rel_tol x mu; between=(LO, HI) "
         "starts from a bracket (no network at LO, one at HI; both checked). Ctrl-C stops it between LPs");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,

@@ -39,6 +39,7 @@ struct FrictionThreshold {
   // Where it is not empty without friction (or the system's mu is 0), mu_low = mu_high = 0.
   double mu_low = 0.0, mu_high = 0.0;
   int lps = 0;           // LPs solved
+  long long iterations = 0;  // dual simplex iterations over the LPs
   double seconds = 0.0;  // wall time of the LPs
 };
 

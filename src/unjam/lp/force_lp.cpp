@@ -56,15 +56,95 @@ bool admissible_point(const Eigen::SparseMatrix<double>& Ay, const Eigen::Vector
   return true;
 }
 
-// Dual simplex on the model's zero objective (dual feasible from the start): whether the
-// admissible set has a point. CLP's status 1 (primal infeasible) says it has none, reliably where
-// the barrier's points are not (admissible_point); any other end but optimal throws, the message
-// starting with `what`.
-bool dual_finds_network(ClpSimplex& model, const std::string& what) {
+// A dual ray w (CLP's infeasibility ray) checked as a certificate of emptiness by
+// proves_no_admissible_network (force_lp.hpp).
+bool proves_empty(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs, const double* ray) {
+  return ray != nullptr && proves_no_admissible_network(Ay, rhs, Eigen::Map<const Eigen::VectorXd>(ray, rhs.size()));
+}
+
+// What a dual simplex on the admissible set decided, checked (dual_decides).
+enum class Verdict { network, empty, undecided };
+
+// How a dual simplex on the model's zero objective (dual feasible from any basis) decides
+// whether the admissible set has a point. CLP's verdicts are on the scaled model, and near an
+// empty set they may be wrong unscaled: an "optimal" point with cone coordinates of -2e-3 F0
+// where a ray proves the set empty (docs/ensemble.md, "The friction threshold"). So each
+// verdict is checked in the model's own units: a point by admissible_point, emptiness by
+// proves_empty on CLP's ray (which CLP does not always leave). Where the check fails, the model
+// is solved again without scaling from the basis reached, and that verdict is checked; undecided
+// where neither checks out. Throws unjam::Error, the message starting with `what`, where CLP ends
+// neither optimal nor infeasible. `iterations` accumulates.
+Verdict dual_decides(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
+                     double tolerance, const std::string& what, long long& iterations) {
+  const int scaling = model.scalingFlag();
+  Verdict verdict = Verdict::undecided;
+  for (int attempt = 0; attempt < 2 && verdict == Verdict::undecided; ++attempt) {
+    if (attempt == 1) model.scaling(0);
+    model.dual();
+    iterations += model.numberIterations();
+    const int status = model.status();
+    if (status == 0) {
+      const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), Ay.cols());
+      if (admissible_point(Ay, rhs, y, tolerance)) verdict = Verdict::network;
+    } else if (status == 1) {
+      double* ray = model.infeasibilityRay();
+      if (proves_empty(Ay, rhs, ray)) verdict = Verdict::empty;
+      delete[] ray;
+    } else {
+      throw Error(what + clp_status_text(status));
+    }
+  }
+  model.scaling(scaling);
+  return verdict;
+}
+
+// The admissible set decided by its elastic LP, where CLP's own verdicts do not check out (it
+// leaves no ray on some infeasible ends):
+//   min sum_i (s+_i + s-_i)  over  A_y y + s+ - s- = rhs,  y, s+, s- >= 0,
+// feasible from y = 0, dual feasible from the all-slack basis (every cost >= 0), so dual
+// simplex reaches its optimum. Its row duals w are a Farkas certificate where the set is empty
+// (max rhs . w over A_y^T w <= 0, |w_i| <= 1), checked by proves_no_admissible_network; else its
+// y an admissible point, checked by admissible_point. Undecided where neither checks.
+Verdict elastic_decides(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs, double tolerance,
+                        const std::string& what, long long& iterations) {
+  const int rows = static_cast<int>(Ay.rows()), cols = static_cast<int>(Ay.cols());
+  Eigen::SparseMatrix<double> E(rows, cols + 2 * rows);
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(Ay.nonZeros() + 2 * rows);
+  for (int j = 0; j < cols; ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Ay, j); it; ++it)
+      entries.emplace_back(static_cast<int>(it.row()), j, it.value());
+  for (int i = 0; i < rows; ++i) {
+    entries.emplace_back(i, cols + i, 1.0);
+    entries.emplace_back(i, cols + rows + i, -1.0);
+  }
+  E.setFromTriplets(entries.begin(), entries.end());
+  E.makeCompressed();
+  ClpSimplex model;
+  load_admissible_set(model, E, rhs, tolerance);
+  for (int j = cols; j < cols + 2 * rows; ++j) model.setObjectiveCoefficient(j, 1.0);
   model.dual();
-  if (model.status() == 1) return false;
-  if (model.status() != 0) throw Error(what + clp_status_text(model.status()));
-  return true;
+  iterations += model.numberIterations();
+  if (model.status() != 0) throw Error(what + "elastic LP: " + clp_status_text(model.status()));
+  // The certificate first: just below the threshold the set is empty while the elastic y
+  // balances every row to within the row check (1e-6 of its scale), and emptiness is the one
+  // verdict that is exact.
+  const Eigen::Map<const Eigen::VectorXd> w(model.dualRowSolution(), rows);
+  if (proves_no_admissible_network(Ay, rhs, w)) return Verdict::empty;
+  const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), cols);
+  return admissible_point(Ay, rhs, y, tolerance) ? Verdict::network : Verdict::undecided;
+}
+
+// Whether the admissible set of the loaded `model` has a point: dual_decides, then
+// elastic_decides where that is undecided. Throws unjam::Error where both are.
+bool decides_network(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
+                     double tolerance, const std::string& what, long long& iterations) {
+  Verdict verdict = dual_decides(model, Ay, rhs, tolerance, what, iterations);
+  if (verdict == Verdict::undecided) verdict = elastic_decides(Ay, rhs, tolerance, what, iterations);
+  if (verdict == Verdict::undecided)
+    throw Error(what + "undecided: neither CLP's point nor a certificate of emptiness checks out in the "
+                       "model's own units (with scaling, without, and by the elastic LP)");
+  return verdict == Verdict::network;
 }
 
 Error no_admissible_network(const EquilibriumSystem& system) {
@@ -90,11 +170,53 @@ void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& A
   model.setDualTolerance(tolerance);
 }
 
+// The pressure row's coefficients are positive (|l_k| / 2 per cone column, |l_k| without
+// friction), so every point of the set has 0 <= y_j <= ub_j = rhs_P / (A_y)_{Pj}, and
+// w . rhs = (A_y^T w) . y >= -sum_j max(0, -(A_y^T w)_j) ub_j. With the sign of w that makes
+// w . rhs < 0, a w whose w . rhs lies below that bound, by more than the round-off of A_y^T w,
+// admits no point.
+bool proves_no_admissible_network(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
+                                  const Eigen::Ref<const Eigen::VectorXd>& w) {
+  if (w.size() != rhs.size() || Ay.rows() != rhs.size()) return false;
+  const Eigen::Index P = rhs.size() - 1;
+  const double w_rhs = w.dot(rhs);
+  if (!(std::isfinite(w_rhs) && w_rhs != 0.0)) return false;
+  const double sign = w_rhs < 0.0 ? 1.0 : -1.0;
+  double lowest = 0.0;  // the bound on w . rhs (sign applied) over the set, minus round-off
+  for (int j = 0; j < Ay.outerSize(); ++j) {
+    double c = 0.0, magnitude = 0.0, a_P = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Ay, j); it; ++it) {
+      c += sign * it.value() * w[it.row()];
+      magnitude += std::abs(it.value() * w[it.row()]);
+      if (it.row() == P) a_P = it.value();
+    }
+    const double roundoff = 1e-14 * magnitude;
+    if (!(a_P > 0.0)) {  // y_j unbounded: only a column with A_y^T w >= 0 is allowed
+      if (c < -roundoff) return false;
+      continue;
+    }
+    lowest -= (std::max(0.0, -c) + roundoff) * (rhs[P] / a_P);
+  }
+  return sign * w_rhs < lowest;
+}
+
 bool has_admissible_network(const EquilibriumSystem& system, double tolerance) {
+  SimplexBasis none;
+  return has_admissible_network(system, tolerance, none);
+}
+
+bool has_admissible_network(const EquilibriumSystem& system, double tolerance, SimplexBasis& basis) {
   if (system.num_contacts() == 0) return false;
   ClpSimplex model;
-  load_admissible_set(model, cone_matrix(system), system.rhs, tolerance);
-  return dual_finds_network(model, "admissible set LP: ");
+  const Eigen::SparseMatrix<double> Ay = cone_matrix(system);
+  load_admissible_set(model, Ay, system.rhs, tolerance);
+  const std::size_t size = static_cast<std::size_t>(model.numberColumns()) + model.numberRows();
+  if (basis.status.size() == size) model.copyinStatus(basis.status.data());
+  basis.iterations = 0;
+  const std::string what = "admissible set LP at mu = " + std::to_string(system.mu) + ": ";
+  const bool found = decides_network(model, Ay, system.rhs, tolerance, what, basis.iterations);
+  basis.status.assign(model.statusArray(), model.statusArray() + size);
+  return found;
 }
 
 ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolerance)
@@ -113,7 +235,7 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
   // (0.2 s against 5 s of dual simplex at 2000 disks); the simplex method needs the basis,
   // and a zero objective is dual feasible: dual simplex. The barrier may call an empty set
   // optimal, so its point is checked (admissible_point); when it fails, dual simplex decides,
-  // which classifies an empty set reliably.
+  // its verdict checked in the model's own units (decides_network).
   bool admissible = false;
   if (method == LpMethod::barrier) {
     const BarrierEnd end = barrier_.solve(model);
@@ -122,9 +244,8 @@ ForceLP::ForceLP(const EquilibriumSystem& system, LpMethod method, double tolera
     admissible = end != BarrierEnd::failed && admissible_point(Ay_, system.rhs, y, tolerance_);
   }
   if (!admissible) {
-    const bool found = dual_finds_network(model, "force bounds LP: first solve ");
-    iterations_ += model.numberIterations();
-    if (!found) throw no_admissible_network(system);
+    if (!decides_network(model, Ay_, system.rhs, tolerance_, "force bounds LP: first solve ", iterations_))
+      throw no_admissible_network(system);
   }
   if (method_ == LpMethod::simplex) max_model_ = std::make_unique<ClpSimplex>(model);
   last_ = &model;

@@ -55,10 +55,37 @@ void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& A
                          const Eigen::VectorXd& rhs, double tolerance);
 
 // Whether the admissible set of `system` has a point: dual simplex on a zero objective, the test
-// ForceLP's constructor falls back on, which classifies an empty set reliably (docs/ensemble.md,
-// "Why each row is checked on its own scale"). `tolerance` as for ForceLP. false for a system
-// without contacts; throws unjam::Error if CLP ends neither optimal nor infeasible.
+// ForceLP's constructor falls back on (docs/ensemble.md, "Why each row is checked on its own
+// scale"). CLP decides on its scaled model; each verdict is checked in the model's own units (the
+// point by the row check of kAdmissibleRowResidual and y >= -tolerance, emptiness by
+// proves_no_admissible_network on CLP's ray), and where the check fails the model is solved again
+// without scaling from the basis reached (docs/ensemble.md, "The friction threshold").
+// `tolerance` as for ForceLP. false for a system without contacts; throws unjam::Error where
+// neither verdict checks out or CLP ends neither optimal nor infeasible.
 bool has_admissible_network(const EquilibriumSystem& system, double tolerance = 1e-9);
+
+// Whether w (one number per row) is a certificate that { A_y y = rhs, y >= 0 } is empty (Farkas:
+// w . rhs < 0 while A_y^T w >= 0, up to what the bounds of y that the pressure row implies allow),
+// checked in the model's own units. Ay = cone_matrix(system), rhs = system.rhs (the pressure row
+// last). has_admissible_network checks CLP's infeasibility ray so before it calls a set empty.
+bool proves_no_admissible_network(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
+                                  const Eigen::Ref<const Eigen::VectorXd>& w);
+
+// The simplex basis of a solved admissible-set LP: CLP's status of every column, then every row
+// (empty: none yet), and the dual simplex iterations of the solve that left it.
+struct SimplexBasis {
+  std::vector<unsigned char> status;
+  long long iterations = 0;
+};
+
+// has_admissible_network warm-started from `basis` where it fits (the same numbers of columns
+// and rows: the same contacts and, for mu > 0 or mu = 0 alike, as many cone columns), and
+// leaving the final basis in it. A zero objective makes every basis dual feasible, so the dual
+// simplex may start from any: for systems that differ only in mu (the friction threshold's
+// bisection) the last one's basis is close, and its LPs take a fraction of the pivots from
+// scratch (docs/ensemble.md, "The friction threshold"). The verdict is the set's, whatever the
+// start.
+bool has_admissible_network(const EquilibriumSystem& system, double tolerance, SimplexBasis& basis);
 
 // The LP over the admissible set of one system, re-solved for one objective after another.
 // Copyable: each copy owns its own CLP models and bases (one per thread).
