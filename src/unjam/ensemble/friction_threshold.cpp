@@ -43,12 +43,13 @@ FrictionThreshold friction_threshold(const EquilibriumSystem& system, const Fric
   const int total = 2 + steps_to(r.mu_high - r.mu_low, resolution);
   EquilibriumSystem at = system;  // the rows do not depend on mu; only the cones change
   // Each LP at mu > 0 starts from the last one's basis (the same columns for every mu > 0); the
-  // LP at 0, with one cone column per contact, from scratch.
-  SimplexBasis basis, frictionless;
+  // LP at 0, with one cone column per contact, from scratch, leaving that basis as it was.
+  SimplexBasis basis;
   const auto admissible_at = [&](double m) {
     if (options.should_stop && options.should_stop()) throw Cancelled();
     at.mu = m;
-    SimplexBasis& start = m > 0.0 ? basis : frictionless;
+    SimplexBasis from_scratch;
+    SimplexBasis& start = m > 0.0 ? basis : from_scratch;
     const bool yes = has_admissible_network(at, options.tolerance, start);
     ++r.lps;
     r.iterations += start.iterations;

@@ -58,8 +58,9 @@ void load_admissible_set(ClpSimplex& model, const Eigen::SparseMatrix<double>& A
 // ForceLP's constructor falls back on (docs/ensemble.md, "Why each row is checked on its own
 // scale"). CLP decides on its scaled model; each verdict is checked in the model's own units (the
 // point by the row check of kAdmissibleRowResidual and y >= -tolerance, emptiness by
-// proves_no_admissible_network on CLP's ray), and where the check fails the model is solved again
-// without scaling from the basis reached (docs/ensemble.md, "The friction threshold").
+// proves_no_admissible_network on CLP's ray); where the check fails the model is solved again
+// without scaling from the basis reached, and then by the elastic LP (docs/ensemble.md, "The
+// friction threshold").
 // `tolerance` as for ForceLP. false for a system without contacts; throws unjam::Error where
 // neither verdict checks out or CLP ends neither optimal nor infeasible.
 bool has_admissible_network(const EquilibriumSystem& system, double tolerance = 1e-9);
