@@ -5,7 +5,7 @@ Usage:  /usr/bin/python3 scripts/experiment.py --scale demo|tiny|paper [--out ru
                                                [--mpi K [--mpirun LAUNCHER]]
                                                [--mus ...] [--ns ...] [--seeds ...]
                                                [--probe-g G] [--samples S]
-                                               [--skip fixed fig4 probe-one]
+                                               [--skip fixed fig4 probe-one threshold]
 
 Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subprocess):
 
@@ -25,17 +25,24 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe cd`, plot_fig4.py;
   probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
                --contact K`) and its displacement field drawn (plot_probe_field.py);
+  threshold    every swept packing with friction: `unjam threshold DIR`, its friction
+               threshold mu_s (the smallest mu at which its contacts still admit a force
+               network) into DIR/friction_threshold.json;
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),
-               OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing);
+               OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing),
+               OUT/friction-threshold.csv (mu_s per packing with friction);
   figures      fig3-friction-sweep.png, fig3-exact-vs-lp.png (with --cd-sample: Fig. 3 by both
                probes on the same contacts, scripts/plot_exact_sweep.py), fig2-profiles.png
                (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
-               (docs/results/README.md), agree / disagree per finding, parameters, timings, figures.
+               (docs/results/README.md), agree / disagree per finding, the packings' friction
+               thresholds, parameters, timings, figures.
 
 --skip leaves out the optional stages named: fixed (the fixed-packing series, fixed.csv and the
-Fig. 3 inset), fig4 (the 50-disk ensemble and Fig. 4), probe-one (the single probe's field), e.g.
+Fig. 3 inset), fig4 (the 50-disk ensemble and Fig. 4), probe-one (the single probe's field),
+threshold (the friction thresholds and their table: ~40 min of one core per packing at 8000
+disks, 1-2 min at 2000, seconds at 1000 and below; docs/ensemble.md), e.g.
 when a run at new sizes only needs the sweep, Fig. 2 and Fig. 3.  The sweep's pack and probe
 stages are the same with or without it, so their cached results stay valid either way.
 
@@ -231,6 +238,8 @@ def main(argv=None):
     print(f"  report:  {os.path.join(out, 'report.md')}")
     tables = (["sweep.csv"] + ([] if "fixed" in args.skip else ["fixed.csv"])
               + (["exact-probe.csv"] if cfg["cd_sample"] > 0 else []))
+    if "threshold" not in args.skip and any(mu > 0 for mu in cfg["mus"]):
+        tables.append("friction-threshold.csv")
     print(f"  tables:  {', '.join(os.path.join(out, t) for t in tables)}")
     for _, f in figures:
         print(f"  figure:  {f}")

@@ -179,6 +179,35 @@ def exact_probe_section(path, start):
     return L
 
 
+def threshold_section(path):
+    """Report lines on the packings' friction thresholds, from OUT/friction-threshold.csv (none
+    when the table does not exist: no packing with friction, or --skip threshold)."""
+    if not os.path.isfile(path):
+        return []
+    groups = {}
+    for r in read_table(path):
+        key = (round(sweep_table.number(r["mu"]), sweep_table.MU_DIGITS), int(r["N"]))
+        groups.setdefault(key, []).append(r)
+    L = ["", "## How much of its friction each packing needs", "",
+         "The friction threshold mu_s of each packing (`unjam threshold`; docs/ensemble.md, \"The "
+         "friction threshold\"): below mu_s no force network on its contacts balances every grain "
+         "and the pressure within the Coulomb cones. With its contacts as they are, the packing "
+         "could be held at any friction coefficient from mu_s on, and mu_s / mu is the part of its "
+         "own friction it needs: near 1, nearly all of it. Bisection on the LP's feasibility to 1e-3 mu, every verdict checked (a "
+         "network by its row residuals, an empty set by a Farkas certificate); mean ± standard "
+         "deviation over the seeds, and the lowest and highest packing. From "
+         "`friction-threshold.csv`.", "",
+         "| mu | N | seeds | mu_s / mu | lowest | highest | LPs per packing | LP s per packing |",
+         "|---|---|---|---|---|---|---|---|"]
+    for (mu, n), g in sorted(groups.items()):
+        ratio = [sweep_table.number(r["mu_s_over_mu"]) for r in g]
+        lps = sweep_table.mean_std([sweep_table.number(r["lps"]) for r in g])[0]
+        secs = sweep_table.mean_std([sweep_table.number(r["lp_seconds"]) for r in g])[0]
+        L.append(f"| {fmt_mu(mu)} | {n} | {len(g)} | {pm(sweep_table.mean_std(ratio))} | "
+                 f"{min(ratio):.4f} | {max(ratio):.4f} | {lps:.0f} | {secs:.2f} |")
+    return L
+
+
 def pairs(args):
     """[flag, value, flag, value, ...] -> [(flag, value), ...]."""
     return list(zip(args[::2], args[1::2]))
@@ -210,6 +239,8 @@ def write_report(path, args, cfg, R, figures, command):
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
     L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
+    if "threshold" not in (args.skip or []):
+        L += threshold_section(os.path.join(out, "friction-threshold.csv"))
     L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
           "| finding | paper | measured | verdict |", "|---|---|---|---|"]
     fig4 = fig4_finding(out)

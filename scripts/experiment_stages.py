@@ -76,8 +76,14 @@ FIG4 = {"n": 50, "mu": 0.1, "seed": 3}
 # ~1e-4 R_max that count as 2-15 redundant contacts at N = 500-2000 (docs/method.md).
 FRICTIONLESS_PACK = ["--tol", "1e-6", "--max-sweeps", "2000"]
 FIG1_MU = 0.5
+# The friction-threshold table (OUT/friction-threshold.csv), one row per swept packing with
+# mu > 0: `unjam threshold` brackets mu_s, the smallest friction coefficient at which the
+# packing's contacts still admit a force network, in (mu_s_low, mu_s_high] (docs/ensemble.md,
+# "The friction threshold"); mu_s_over_mu = mu_s_high / mu; lps and simplex_iterations its cost.
+THRESHOLD_COLUMNS = ["mu", "N", "seed", "contacts", "mu_s_low", "mu_s_high", "mu_s_over_mu",
+                     "lps", "simplex_iterations", "lp_seconds"]
 # The optional stages that `--skip` can leave out (scripts/experiment.py).
-SKIPPABLE = ["fixed", "fig4", "probe-one"]
+SKIPPABLE = ["fixed", "fig4", "probe-one", "threshold"]
 PROBE_OUTPUTS = ["probes.csv", "response_field.csv", "response_profile.csv",
                  "probe_summary.json", "probe_checkpoint.json"]
 
@@ -148,6 +154,39 @@ def probe_stage(R, name, d, g, sample, dep):
         R.call(st, R.unjam_cmd("probe", d, *args, "--quiet", mpi=True))
     return Stage(name, f"unjam probe {os.path.relpath(d, R.out)} {' '.join(select)}",
                  os.path.join(d, "stage.json"), params, run, lambda: probe_done(d), [dep])
+
+
+def threshold_file(d):
+    return os.path.join(d, "friction_threshold.json")
+
+
+def threshold_done(d):
+    t = read_json(threshold_file(d))
+    return bool(t and "mu_s_over_mu" in t and "mu_s_low" in t)
+
+
+def threshold_stage(R, name, d, dep):
+    """`unjam threshold d`: the packing's friction threshold into d/friction_threshold.json."""
+    params = {"command": ["unjam", "threshold", d], "version": R.version}
+
+    def run(st):
+        if os.path.exists(threshold_file(d)):
+            os.remove(threshold_file(d))
+        R.call(st, R.unjam_cmd("threshold", d, "--quiet", threads_flag=False))
+    return Stage(name, f"unjam threshold {os.path.relpath(d, R.out)}",
+                 os.path.join(d, "stage.json"), params, run, lambda: threshold_done(d), [dep])
+
+
+def threshold_row(d, mu, n, seed):
+    """One row of THRESHOLD_COLUMNS from d/friction_threshold.json."""
+    t = read_json(threshold_file(d))
+    if t is None:
+        raise StageError(f"{threshold_file(d)} does not read")
+    return {"mu": fmt_mu(mu), "N": n, "seed": seed, "contacts": t["contacts_used"],
+            "mu_s_low": repr(float(t["mu_s_low"])), "mu_s_high": repr(float(t["mu_s_high"])),
+            "mu_s_over_mu": repr(float(t["mu_s_over_mu"])), "lps": t["lps"],
+            "simplex_iterations": t.get("simplex_iterations", ""),
+            "lp_seconds": repr(float(t["timings_s"]["lp"]))}
 
 
 def exact_probe_dirs(d):
@@ -380,6 +419,12 @@ def build(args, cfg, R):
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
                                         p["pack"], cd_options(cfg)))
 
+    # How far each packing is from losing its network: its friction threshold mu_s.
+    frictional = [p for p in sweep if p["mu"] > 0] if "threshold" not in skip else []
+    for p in frictional:
+        stages.append(threshold_stage(R, "threshold " + p["pack"][len("pack "):], p["dir"],
+                                      p["pack"]))
+
     # Fig. 4
     fig4 = os.path.join(out, "fig4-ensemble.png")
     if "fig4" not in skip:
@@ -400,6 +445,12 @@ def build(args, cfg, R):
             R, "table exact", os.path.join(out, "exact-probe.csv"),
             [table_entry(p) for p in exact],
             ["exact " + p["probe"][len("probe "):] for p in exact], EXACT_COLUMNS, exact_row))
+    if frictional:
+        stages.append(table_stage(
+            R, "table threshold", os.path.join(out, "friction-threshold.csv"),
+            [table_entry(p) for p in frictional],
+            ["threshold " + p["pack"][len("pack "):] for p in frictional], THRESHOLD_COLUMNS,
+            threshold_row))
     if source:
         series = [source] + fixed
         stages.append(table_stage(R, "table fixed", fixed_csv,

@@ -65,7 +65,9 @@ class ExperimentTiny(unittest.TestCase):
             expected += [f"{d}/meta.json", f"{d}/probe_summary.json", f"{d}/probes.csv",
                          f"{d}/response_profile.csv", f"{d}/stage.json"]
         for mu in ("0.1", "1"):
-            expected += [f"fixed/N100-mu{mu}/meta.json", f"fixed/N100-mu{mu}/probe_summary.json"]
+            expected += [f"fixed/N100-mu{mu}/meta.json", f"fixed/N100-mu{mu}/probe_summary.json",
+                         f"packings/N100-mu{mu}-s1/friction_threshold.json"]
+        expected.append("friction-threshold.csv")
         for f in expected:
             self.assertTrue(os.path.isfile(os.path.join(o, f)), f"missing {f}")
             self.assertGreater(os.path.getsize(os.path.join(o, f)), 0, f"empty {f}")
@@ -75,7 +77,7 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(o, "fixed.csv")) as f:
             self.assertEqual(len(list(csv.DictReader(f))), 3)
         self.assertEqual(set(outcomes(self.first).values()), {"ran"})
-        self.assertEqual(len(outcomes(self.first)), 19)
+        self.assertEqual(len(outcomes(self.first)), 22)
 
     def test_1_frictionless_packing_is_isostatic(self):
         # mu = 0 is packed with tighter dynamics (FRICTIONLESS_PACK), so that its network is
@@ -127,9 +129,33 @@ class ExperimentTiny(unittest.TestCase):
         self.assertRegex(report, r"\| F_crit = max of the admissible interval \(N = 50, mu = 0\.1\) "
                          r"\|.*\| \*\*" + verdict + r"\*\* \|")
 
+    def test_2b_friction_thresholds_in_table_and_report(self):
+        # Every packing with friction has its threshold bracketed to 1e-3 mu below its own mu
+        # (its network is admissible at mu), the table holds the json's bracket, and the
+        # report's row is the table's.
+        with open(os.path.join(self.out, "friction-threshold.csv")) as f:
+            rows = {r["mu"]: r for r in csv.DictReader(f)}
+        self.assertEqual(set(rows), {"0.1", "1"})
+        with open(os.path.join(self.out, "report.md")) as f:
+            report = f.read()
+        for mu, r in rows.items():
+            with open(os.path.join(self.out, f"packings/N100-mu{mu}-s1/friction_threshold.json")) as f:
+                t = json.load(f)
+            lo, hi, m = float(r["mu_s_low"]), float(r["mu_s_high"]), float(mu)
+            self.assertEqual((lo, hi), (t["mu_s_low"], t["mu_s_high"]))
+            self.assertLess(lo, hi)
+            self.assertLessEqual(hi - lo, 1e-3 * m)
+            self.assertLessEqual(hi, m)
+            self.assertGreater(lo, 0.0)
+            self.assertEqual(float(r["mu_s_over_mu"]), hi / m)
+            self.assertEqual(int(r["contacts"]), t["contacts_used"])
+            ratio = float(r["mu_s_over_mu"])
+            self.assertIn(f"| {mu} | 100 | 1 | {ratio:.4f} ± 0.0000 | {ratio:.4f} | {ratio:.4f} | "
+                          f"{t['lps']} |", report)
+
     def test_3_rerun_skips_everything(self):
         res = outcomes(run(self.out))
-        self.assertEqual(len(res), 19)
+        self.assertEqual(len(res), 22)
         self.assertEqual({k for k, v in res.items() if v != "cached"}, set())
 
     def test_4_changed_parameter_reruns_dependent_stages_only(self):
@@ -139,7 +165,7 @@ class ExperimentTiny(unittest.TestCase):
                     "probe fixed N100-mu0.1", "probe fixed N100-mu1", "table sweep",
                     "table fixed", "plot fig3", "plot fig2", "plot fig1", "probe one"}
         self.assertEqual(ran, expected)
-        self.assertEqual(len(res), 19)     # the packs, the ensemble and Fig. 4 were cached
+        self.assertEqual(len(res), 22)     # the packs, thresholds, ensemble and Fig. 4 were cached
         with open(os.path.join(self.out, "packings/N100-mu0.1-s1/probe_summary.json")) as f:
             self.assertIn('"g": 2e-09', f.read())
 
@@ -166,8 +192,9 @@ class ExperimentTiny(unittest.TestCase):
 
         res = outcomes(run(self.out, "--probe-g", "2e-9"))
         ran = {k for k, v in res.items() if v == "ran"}
-        self.assertEqual(ran, {"pack N100-mu1-s1", "probe N100-mu1-s1", "table sweep",
-                               "plot fig3", "plot fig2", "plot fig1", "probe one"})
+        self.assertEqual(ran, {"pack N100-mu1-s1", "probe N100-mu1-s1", "threshold N100-mu1-s1",
+                               "table sweep", "table threshold", "plot fig3", "plot fig2",
+                               "plot fig1", "probe one"})
         with open(os.path.join(self.out, "logs", "pack_N100-mu1-s1.log")) as f:
             self.assertIn("pack --resume", f.read())
         with open(os.path.join(d, "particles.csv")) as f:
@@ -201,19 +228,24 @@ class ExperimentTiny(unittest.TestCase):
             self.assertEqual(len(json.load(f)["ranks"]), 2)
 
     def test_7_skip_leaves_out_the_optional_stages_only(self):
-        # --skip fixed fig4 probe-one: the sweep's stages stay cached, Fig. 3 is redrawn
-        # without the inset; the default run afterwards has every stage again, and only
-        # Fig. 3 is redrawn (with the inset). (--probe-g as left by test_4.)
-        res = outcomes(run(self.out, "--probe-g", "2e-9", "--skip", "fixed", "fig4", "probe-one"))
+        # --skip fixed fig4 probe-one threshold: the sweep's stages stay cached, Fig. 3 is
+        # redrawn without the inset, the report has no threshold section; the default run
+        # afterwards has every stage again, and only Fig. 3 is redrawn (with the inset).
+        # (--probe-g as left by test_4.)
+        res = outcomes(run(self.out, "--probe-g", "2e-9", "--skip", "fixed", "fig4", "probe-one",
+                           "threshold"))
         self.assertEqual(len(res), 10)
-        self.assertFalse(any(k.startswith(("pack fixed", "probe fixed", "pack fig4")) or
-                             k in ("table fixed", "ensemble fig4", "plot fig4", "probe one")
+        self.assertFalse(any(k.startswith(("pack fixed", "probe fixed", "pack fig4", "threshold"))
+                             or k in ("table fixed", "ensemble fig4", "plot fig4", "probe one",
+                                      "table threshold")
                              for k in res), res)
+        with open(os.path.join(self.out, "report.md")) as f:
+            self.assertNotIn("## How much of its friction", f.read())
         self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
         with open(os.path.join(self.out, "stage.json")) as f:
             self.assertGreaterEqual(json.load(f)["plot fig3"]["cpu_seconds"], 0)
         res = outcomes(run(self.out, "--probe-g", "2e-9"))
-        self.assertEqual(len(res), 19)
+        self.assertEqual(len(res), 22)
         self.assertEqual({k for k, v in res.items() if v == "ran"}, {"plot fig3"})
 
     def test_8_merge_sweep_rebuilds_the_table_from_the_packings(self):

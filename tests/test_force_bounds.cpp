@@ -317,13 +317,29 @@ TEST(ForceBounds, BelowThePackingsOwnThresholdBothMethodsFindNoNetwork) {
   const auto sys = unjam::build_equilibrium_system(p, contacts);
   unjam::ForceLP barrier(sys, unjam::LpMethod::barrier), simplex(sys, unjam::LpMethod::simplex);
   const double F0 = p.force_unit();
+  // Each simplex optimum's network, so near the threshold, balances every grain and the
+  // pressure to round-off and lies in the cones (ForceLP checks it, and solves again without
+  // scaling where CLP's scaled optimum fails: docs/ensemble.md, "The LP").
+  const auto expect_admissible = [&](const unjam::ForceNetwork& net, int k) {
+    Eigen::VectorXd x(2 * sys.num_contacts());
+    for (int j = 0; j < sys.num_contacts(); ++j) {
+      x[2 * j] = net.fn[j];
+      x[2 * j + 1] = net.ft[j];
+      EXPECT_GE(net.fn[j], -1e-9 * F0) << k;
+      EXPECT_LE(std::abs(net.ft[j]), sys.mu * net.fn[j] + 1e-9 * F0) << k;
+    }
+    EXPECT_LT((sys.A * x - sys.rhs).cwiseAbs().maxCoeff(), 1e-8 * F0) << k;
+  };
   for (int k = 0; k < sys.num_contacts(); k += 97) {
     const double lo = barrier.min_fn(k), hi = barrier.max_fn(k);
     EXPECT_LE(lo, hi) << k;
     EXPECT_NEAR(lo, simplex.min_fn(k), 1e-7 * F0) << k;
+    expect_admissible(simplex.network(), k);
     EXPECT_NEAR(hi, simplex.max_fn(k), 1e-7 * F0) << k;
+    expect_admissible(simplex.network(), k);
   }
   EXPECT_EQ(barrier.simplex_finishes(), 0);
+  EXPECT_EQ(barrier.unscaled_solves(), 0);  // only simplex solves are re-solved unscaled
 }
 
 // The friction threshold of p500-mu0.1 lies between 0.097 and 0.0975 (the test above: no
@@ -560,6 +576,8 @@ TEST(BoundsCheckpoint, StoppedRunsResumeToTheBitsOfOneRun) {
   }
   EXPECT_EQ(b.min_lps_skipped, whole.min_lps_skipped);
   EXPECT_EQ(b.iterations, whole.iterations);
+  EXPECT_EQ(b.simplex_finishes, whole.simplex_finishes);
+  EXPECT_EQ(b.unscaled_solves, whole.unscaled_solves);
 }
 
 // A checkpoint of another run, or one that is not a checkpoint, is refused with its name and
@@ -650,7 +668,12 @@ TEST(ForceBounds, CommandWritesCsvAndJson) {
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 81);
-  EXPECT_TRUE(fs::exists(dir / "bounds.json"));
+  ASSERT_TRUE(fs::exists(dir / "bounds.json"));
+  // How each LP was solved: on p50 every barrier point passes the row check.
+  const auto j = nlohmann::json::parse(unjam::read_file(dir / "bounds.json"));
+  EXPECT_EQ(j.at("lps_at_looser_tolerance").get<long long>(), 0);
+  EXPECT_EQ(j.at("lps_finished_by_simplex").get<long long>(), 0);
+  EXPECT_EQ(j.at("lps_solved_unscaled").get<long long>(), 0);
   fs::remove_all(dir);
 }
 

@@ -124,6 +124,8 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
       {"min_lps_skipped", bounds.min_lps_skipped},
       {"iterations", bounds.iterations},
       {"lps_at_looser_tolerance", bounds.loosened_solves},
+      {"lps_finished_by_simplex", bounds.simplex_finishes},
+      {"lps_solved_unscaled", bounds.unscaled_solves},
       {"timings_s",
        {{"read_and_build", run.t_build}, {"rank", run.t_rank}, {"lp", bounds.seconds},
         {"lp_per_contact", Nc > 0 ? bounds.seconds / Nc : 0.0}, {"total", run.t_total}}},
@@ -155,6 +157,11 @@ void write_bounds(const BoundsOptions& opt, const Packing& packing, const Equili
   if (bounds.loosened_solves > 0)
     std::printf("barrier stalls     %lld LPs solved again at 10-100x the tolerance\n",
                 bounds.loosened_solves);
+  if (bounds.simplex_finishes > 0)
+    std::printf("simplex finishes   %lld LPs whose barrier point failed the row check\n", bounds.simplex_finishes);
+  if (bounds.unscaled_solves > 0)
+    std::printf("unscaled solves    %lld LPs whose scaled simplex optimum failed the row check\n",
+                bounds.unscaled_solves);
   std::printf("time per contact   %.3g s (LP %.3g s, %s, %d threads)\n",
               Nc > 0 ? bounds.seconds / Nc : 0.0, bounds.seconds, opt.method.c_str(), lp.threads);
   if (run.all_runs.runs > 1 || run.all_runs.untimed > 0) {
@@ -191,7 +198,8 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
       {"options", {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}}},
       {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max},
       {"min_lps_skipped", b.min_lps_skipped}, {"iterations", b.iterations},
-      {"loosened_solves", b.loosened_solves}, {"lp_seconds", b.seconds},
+      {"loosened_solves", b.loosened_solves}, {"simplex_finishes", b.simplex_finishes},
+      {"unscaled_solves", b.unscaled_solves}, {"lp_seconds", b.seconds},
       {"busy_seconds", run.loads.at(0).busy_seconds}, {"all_runs", to_json(run.all_runs)},
       {"command", command_line()}};
   const std::filesystem::path file = output_dir(opt) / shard_file_name("bounds_shard", shard, shards);
@@ -308,6 +316,8 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
     bounds.min_lps_skipped += j.at("min_lps_skipped").get<int>();
     bounds.iterations += j.at("iterations").get<long long>();
     bounds.loosened_solves += j.at("loosened_solves").get<long long>();
+    bounds.simplex_finishes += j.value("simplex_finishes", 0LL);  // 0 in shards written before
+    bounds.unscaled_solves += j.value("unscaled_solves", 0LL);
     bounds.seconds = std::max(bounds.seconds, j.at("lp_seconds").get<double>());
     run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
                          j.at("busy_seconds").get<double>()});

@@ -60,6 +60,9 @@ BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json se
     b->min_lps_skipped = j.at("min_lps_skipped").get<int>();
     b->iterations = j.at("iterations").get<long long>();
     b->loosened_solves = j.at("loosened_solves").get<long long>();
+    // Checkpoints written before these counts were kept: 0.
+    b->simplex_finishes = j.value("simplex_finishes", 0LL);
+    b->unscaled_solves = j.value("unscaled_solves", 0LL);
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
@@ -97,6 +100,8 @@ void BoundsCheckpoint::save(const ForceBounds& b, const CampaignTime& runs) cons
                                           {"min_lps_skipped", b.min_lps_skipped},
                                           {"iterations", b.iterations},
                                           {"loosened_solves", b.loosened_solves},
+                                          {"simplex_finishes", b.simplex_finishes},
+                                          {"unscaled_solves", b.unscaled_solves},
                                           {"runs", to_json(runs)}}
                                .dump());
 }

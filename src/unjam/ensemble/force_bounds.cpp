@@ -16,20 +16,21 @@ namespace unjam {
 namespace {
 
 // One LP's outcome as it travels to the gathering process: its optimum, the solver's
-// iterations, whether it was loosened, the contacts its optimal network opens (fn <= open_tol;
+// iterations, whether it was loosened, finished by simplex or solved again unscaled, the contacts its optimal network opens (fn <= open_tol;
 // only from LPs solved at the requested tolerance), and the whole network if asked for.
 struct LpOutcome {
   bool skipped = false;  // phase 2: the contact was already known to open, no LP
   double value = 0.0;
   long long iterations = 0;
   bool loosened = false;
+  bool simplex_finished = false, unscaled = false;
   std::vector<int> opened;
   std::vector<double> fn, ft;  // keep_networks_at_max
 };
 
 std::string encode(const LpOutcome& o) {
   ByteWriter w;
-  w.put(o.skipped).put(o.value).put(o.iterations).put(o.loosened);
+  w.put(o.skipped).put(o.value).put(o.iterations).put(o.loosened).put(o.simplex_finished).put(o.unscaled);
   w.put_array(o.opened.data(), o.opened.size());
   w.put_array(o.fn.data(), o.fn.size()).put_array(o.ft.data(), o.ft.size());
   return w.take();
@@ -42,6 +43,8 @@ LpOutcome decode(const std::string& bytes) {
   o.value = r.get<double>();
   o.iterations = r.get<long long>();
   o.loosened = r.get<bool>();
+  o.simplex_finished = r.get<bool>();
+  o.unscaled = r.get<bool>();
   o.opened = r.get_array<int>();
   o.fn = r.get_array<double>();
   o.ft = r.get_array<double>();
@@ -51,10 +54,12 @@ LpOutcome decode(const std::string& bytes) {
 // Solves one LP with `lp` (solve returns its optimum) and describes the outcome.
 template <class Solve>
 LpOutcome solve_lp(ForceLP& lp, double open_tol, bool keep_network, Solve solve) {
-  const long long before = lp.iterations();
+  const long long before = lp.iterations(), finishes = lp.simplex_finishes(), unscaled = lp.unscaled_solves();
   LpOutcome o;
   o.value = solve(lp);
   o.iterations = lp.iterations() - before;
+  o.simplex_finished = lp.simplex_finishes() > finishes;
+  o.unscaled = lp.unscaled_solves() > unscaled;
   o.loosened = lp.last_solve_loosened();
   if (o.loosened && !keep_network) return o;
   const ForceNetwork net = lp.network();
@@ -98,6 +103,8 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
     bounds.fn_max = resume->fn_max;
     bounds.iterations = resume->iterations;
     bounds.loosened_solves = resume->loosened_solves;
+    bounds.simplex_finishes = resume->simplex_finishes;
+    bounds.unscaled_solves = resume->unscaled_solves;
     bounds.min_lps_skipped = resume->min_lps_skipped;
     done = static_cast<int>(Nc - bounds.fn_min.array().isNaN().count() + Nc - bounds.fn_max.array().isNaN().count());
   }
@@ -131,6 +138,8 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBou
   const auto count = [&](const LpOutcome& o) {
     bounds.iterations += o.iterations;
     bounds.loosened_solves += o.loosened;
+    bounds.simplex_finishes += o.simplex_finished;
+    bounds.unscaled_solves += o.unscaled;
     if (options.progress) options.progress(++done, total);
     if (options.checkpoint) options.checkpoint(partial());
   };

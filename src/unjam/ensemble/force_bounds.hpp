@@ -44,6 +44,8 @@ struct ForceBounds {
   int min_lps_skipped = 0;  // minima certified 0 by another LP's network, without their own
   long long iterations = 0;                  // solver iterations over all LPs
   long long loosened_solves = 0;  // LPs solved at looser tolerances (ForceLP::loosened_solves)
+  long long simplex_finishes = 0;  // barrier LPs finished by simplex (ForceLP::simplex_finishes)
+  long long unscaled_solves = 0;   // simplex LPs solved again unscaled (ForceLP::unscaled_solves)
   double seconds = 0.0;                      // wall time of all LPs (model build included)
   // false if should_stop stopped the LPs: then NaN marks the values not known yet, and
   // fn_min = 0 every contact some optimal network opened (what a resume needs).

@@ -266,6 +266,46 @@ ForceLP::ForceLP(const ForceLP& other)
 
 ForceLP::~ForceLP() = default;
 
+// Primal simplex from the model's basis (the last optimum's, or the barrier's point), its
+// optimum checked as the first solve's is (dual_decides): the point must pass admissible_point
+// in the model's own units, else the model is solved again without scaling from the basis
+// reached. The set is not empty (the constructor found a checked point), so an infeasible end
+// is a wrong verdict of the scaled model and gets the same second solve; a ray that proves the
+// set empty (the band below a friction threshold where a point passes the row check while no
+// network exists, docs/ensemble.md) throws "no admissible force network". false where neither
+// solve ends at a checked point; throws unjam::Error, the message starting with `what`, where
+// CLP ends neither optimal nor infeasible.
+bool ForceLP::primal_decides(ClpSimplex& model, const std::string& what) {
+  const int scaling = model.scalingFlag();
+  bool solved = false;
+  for (int attempt = 0; attempt < 2 && !solved; ++attempt) {
+    if (attempt == 1) {
+      model.scaling(0);
+      ++unscaled_solves_;
+    }
+    model.primal();
+    iterations_ += model.numberIterations();
+    const int status = model.status();
+    if (status == 0) {
+      const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), model.numberColumns());
+      solved = admissible_point(Ay_, system_->rhs, y, tolerance_);
+    } else if (status == 1) {
+      double* ray = model.infeasibilityRay();
+      const bool empty = proves_empty(Ay_, system_->rhs, ray);
+      delete[] ray;
+      if (empty) {
+        model.scaling(scaling);
+        throw no_admissible_network(*system_);
+      }
+    } else {
+      model.scaling(scaling);
+      throw Error(what + clp_status_text(status));
+    }
+  }
+  model.scaling(scaling);
+  return solved;
+}
+
 double ForceLP::optimize(int k, double direction) {
   if (k < 0 || k >= system_->num_contacts())
     throw Error("force bounds LP: contact " + std::to_string(k) + " out of range");
@@ -294,18 +334,14 @@ double ForceLP::optimize(int k, double direction) {
     solved = end != BarrierEnd::failed && admissible_point(Ay_, system_->rhs, y, tolerance_);
     simplex_finishes_ += !solved;
   }
-  if (!solved) {  // the simplex method, or a barrier failure finished by simplex
-    model.primal();
-    iterations_ += model.numberIterations();
-    solved = model.status() == 0;
-  }
-  // An empty set that the first solve took for admissible (dual simplex within its tolerance
-  // from the barrier's point) shows here.
-  if (model.status() == 1) throw no_admissible_network(*system_);
+  const std::string what = "force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
+                           " of fn of contact " + std::to_string(k) + " ";
+  if (!solved) solved = primal_decides(model, what);
   if (!solved)
-    throw Error("force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
-                " of fn of contact " + std::to_string(k) + " " +
-                clp_status_text(model.status()));
+    throw Error(what + "ends " + clp_status_text(model.status()) +
+                (model.status() == 0 ? " at a point that is not admissible in the model's own units "
+                                       "(with scaling and without)"
+                                     : ""));
   last_ = &model;
   const double* y = model.primalColumnSolution();
   return per_contact_ == 2 ? 0.5 * (y[2 * k] + y[2 * k + 1]) : y[k];

@@ -9,6 +9,7 @@
 // (ensemble/force_bounds) and the fast probe (probe/kinematic_probe: F_crit = max fn_k,
 // docs/probe.md, "The fast method") both solve them.
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -103,7 +104,10 @@ class ForceLP {
   ForceLP& operator=(const ForceLP&) = delete;
   ~ForceLP();
 
-  // min / max of fn_k over the admissible set (k: position in system.contacts).
+  // min / max of fn_k over the admissible set (k: position in system.contacts). Every optimum's
+  // point is checked in the model's own units (kAdmissibleRowResidual, y >= -tolerance): the
+  // barrier's, else primal simplex's, else that of a primal simplex without scaling. Throws
+  // unjam::Error where none passes.
   double min_fn(int k);
   double max_fn(int k);
 
@@ -120,9 +124,14 @@ class ForceLP {
   // Barrier solves whose point was not admissible (or that failed) and were finished by primal
   // simplex, over every solve of this object after the first (a copy starts from 0).
   long long simplex_finishes() const { return simplex_finishes_; }
+  // Simplex solves of the min / max LPs whose optimum on CLP's scaled model failed the row
+  // check (or that CLP called infeasible) and were solved again without scaling, over every
+  // solve of this object after the first (a copy starts from 0).
+  long long unscaled_solves() const { return unscaled_solves_; }
 
  private:
   double optimize(int k, double direction);
+  bool primal_decides(ClpSimplex& model, const std::string& what);
 
   const EquilibriumSystem* system_;
   LpMethod method_;
@@ -137,6 +146,7 @@ class ForceLP {
   long long iterations_ = 0;
   long long loosened_solves_ = 0;
   long long simplex_finishes_ = 0;
+  long long unscaled_solves_ = 0;
   bool last_loosened_ = false;
 };
 
