@@ -126,6 +126,15 @@ START_WORDS = {
 }
 
 
+def rows_by_mu_and_n(rows):
+    """{(mu, N): [rows]} of a per-packing table, in the table's order within each group."""
+    groups = {}
+    for r in rows:
+        key = (round(sweep_table.number(r["mu"]), sweep_table.MU_DIGITS), int(r["N"]))
+        groups.setdefault(key, []).append(r)
+    return groups
+
+
 def sampling_error(group, method):
     """sqrt(sum SE_i^2) / n over the packings of a group: the standard error of their mean
     <F_crit>/<F_cont> by `method` from the sampling of the contacts; "—" unless every packing
@@ -141,10 +150,7 @@ def exact_probe_section(path, start):
     from OUT/exact-probe.csv (none when the table does not exist)."""
     if not os.path.isfile(path):
         return []
-    groups = {}
-    for r in read_table(path):
-        key = (round(sweep_table.number(r["mu"]), sweep_table.MU_DIGITS), int(r["N"]))
-        groups.setdefault(key, []).append(r)
+    groups = rows_by_mu_and_n(read_table(path))
     mean = lambda g, c: sweep_table.mean_std([sweep_table.number(r[c]) for r in g])  # noqa: E731
     L = ["", "## The exact probe beside lp", "",
          "The paper's probe step solved exactly (`--method cd --cd-start " + start + "`: "
@@ -184,10 +190,7 @@ def threshold_section(path):
     when the table does not exist: no packing with friction, or --skip threshold)."""
     if not os.path.isfile(path):
         return []
-    groups = {}
-    for r in read_table(path):
-        key = (round(sweep_table.number(r["mu"]), sweep_table.MU_DIGITS), int(r["N"]))
-        groups.setdefault(key, []).append(r)
+    groups = rows_by_mu_and_n(read_table(path))
     L = ["", "## How much of its friction each packing needs", "",
          "The friction threshold mu_s of each packing (`unjam threshold`; docs/ensemble.md, \"The "
          "friction threshold\"): below mu_s no force network on its contacts balances every grain "
