@@ -340,6 +340,11 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   d["dimension"] = rank.dimension;
   d["rank"] = rank.rank;
   d["min_lps_skipped"] = b.min_lps_skipped;
+  // How the LPs were solved, as bounds.json says it (docs/ensemble.md, "The LP").
+  d["iterations"] = b.iterations;
+  d["lps_at_looser_tolerance"] = b.loosened_solves;
+  d["lps_finished_by_simplex"] = b.simplex_finishes;
+  d["lps_solved_unscaled"] = b.unscaled_solves;
   return d;
 }
 
