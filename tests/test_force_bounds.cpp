@@ -342,6 +342,28 @@ TEST(ForceBounds, BelowThePackingsOwnThresholdBothMethodsFindNoNetwork) {
   EXPECT_EQ(barrier.unscaled_solves(), 0);  // only simplex solves are re-solved unscaled
 }
 
+// A simplex optimum is not taken on trust either. On p500-mu0.1 at its own mu, the min of fn of
+// contact 618 warm-started from that of contact 617 ends "optimal" on CLP's scaled model
+// (Debian's CLP 1.17) at a point with a cone coordinate of -4.6e-9 (the tolerance is 1e-9), so
+// the contact's force lies outside its cone; ForceLP solves it again without scaling, where the
+// optimum is admissible and its value that of the LP from scratch (docs/ensemble.md, "The LP").
+TEST(ForceBounds, ASimplexOptimumOutsideTheConesIsSolvedAgainUnscaled) {
+  const Packing p = unjam::read_packing(fixture_dir("p500-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  const double F0 = p.force_unit();
+  unjam::ForceLP warm(sys, unjam::LpMethod::simplex), cold(sys, unjam::LpMethod::simplex);
+  warm.min_fn(617);
+  const double v = warm.min_fn(618);
+  EXPECT_EQ(warm.unscaled_solves(), 1)
+      << "CLP's scaled optimum is admissible here now: the unscaled solve needs another case";
+  const unjam::ForceNetwork net = warm.network();
+  for (int j = 0; j < sys.num_contacts(); ++j)  // the cone coordinates fn -+ ft / mu >= -1e-9
+    EXPECT_GE(net.fn[j] - std::abs(net.ft[j]) / sys.mu, -1e-9) << j;
+  EXPECT_NEAR(net.fn[618], v, 1e-12 * F0);
+  EXPECT_NEAR(v, cold.min_fn(618), 1e-10 * F0);
+  EXPECT_EQ(cold.unscaled_solves(), 0);
+}
+
 // The friction threshold of p500-mu0.1 lies between 0.097 and 0.0975 (the test above: no
 // network at 0.095-0.097 by both methods, one at 0.0975). The bisection must bracket it to
 // 1e-3 mu in 12 LPs, with no network at its lower end and one at its upper end by the other
