@@ -16,8 +16,9 @@ namespace unjam {
 namespace {
 
 // One LP's outcome as it travels to the gathering process: its optimum, the solver's
-// iterations, whether it was loosened, finished by simplex or solved again unscaled, the contacts its optimal network opens (fn <= open_tol;
-// only from LPs solved at the requested tolerance), and the whole network if asked for.
+// iterations, whether it was loosened, finished by simplex or solved again unscaled, the
+// contacts its optimal network opens (fn <= open_tol; only from LPs solved at the requested
+// tolerance), and the whole network if asked for.
 struct LpOutcome {
   bool skipped = false;  // phase 2: the contact was already known to open, no LP
   double value = 0.0;
