@@ -196,10 +196,10 @@ def threshold_section(path):
          "friction threshold\"): below mu_s no force network on its contacts balances every grain "
          "and the pressure within the Coulomb cones. With its contacts as they are, the packing "
          "could be held at any friction coefficient from mu_s on, and mu_s / mu is the part of its "
-         "own friction it needs: near 1, nearly all of it. Bisection on the LP's feasibility to 1e-3 mu, every verdict checked (a "
-         "network by its row residuals, an empty set by a Farkas certificate); mean ± standard "
-         "deviation over the seeds, and the lowest and highest packing. From "
-         "`friction-threshold.csv`.", "",
+         "own friction it needs: near 1, nearly all of it. Bisection on the LP's feasibility to "
+         "1e-3 mu, every verdict checked (a network by its row residuals, an empty set by a "
+         "Farkas certificate); mean ± standard deviation over the seeds, and the lowest and "
+         "highest packing. From `friction-threshold.csv`.", "",
          "| mu | N | seeds | mu_s / mu | lowest | highest | LPs per packing | LP s per packing |",
          "|---|---|---|---|---|---|---|---|"]
     for (mu, n), g in sorted(groups.items()):
