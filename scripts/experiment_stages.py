@@ -160,6 +160,10 @@ def threshold_file(d):
     return os.path.join(d, "friction_threshold.json")
 
 
+def threshold_checkpoint_file(d):
+    return os.path.join(d, "friction_threshold_checkpoint.json")
+
+
 def threshold_done(d):
     t = read_json(threshold_file(d))
     return bool(t and "mu_s_over_mu" in t and "mu_s_low" in t)
@@ -170,8 +174,12 @@ def threshold_stage(R, name, d, dep):
     params = {"command": ["unjam", "threshold", d], "version": R.version}
 
     def run(st):
-        if os.path.exists(threshold_file(d)):
-            os.remove(threshold_file(d))
+        # A stopped run's checkpoint (friction_threshold_checkpoint.json) is resumed by unjam
+        # itself; other parameters start over.
+        stale = [threshold_file(d)] + ([] if st.resume else [threshold_checkpoint_file(d)])
+        for f in stale:
+            if os.path.exists(f):
+                os.remove(f)
         R.call(st, R.unjam_cmd("threshold", d, "--quiet", threads_flag=False))
     return Stage(name, f"unjam threshold {os.path.relpath(d, R.out)}",
                  os.path.join(d, "stage.json"), params, run, lambda: threshold_done(d), [dep])

@@ -161,6 +161,55 @@ TEST_F(CliEnsemble, ThresholdBracketsTheFrictionThreshold) {
   EXPECT_FALSE(fs::exists(none));
 }
 
+// A stopped `unjam threshold` (--stop-after, as Ctrl-C) keeps its bracket in
+// friction_threshold_checkpoint.json; the same command resumes from it without solving its ends
+// again and ends on the bracket of one uninterrupted run, with every run's LPs counted, and
+// removes the checkpoint. A checkpoint of other settings, a damaged one, or --between beside
+// one is refused, and the checkpoint kept.
+TEST_F(CliEnsemble, ThresholdStoppedResumesToTheBracketOfOneRun) {
+  const fs::path whole = dir_ / "whole.json", out = dir_ / "t.json", cp = dir_ / "t_checkpoint.json";
+  ASSERT_EQ(run_tool("threshold " + q(dir_) + " --quiet --out " + q(whole)).exit_code, 0);
+  const nlohmann::json w = read_json_file(whole);
+  const testing::ToolRun stopped = run_tool("threshold " + q(dir_) + " --quiet --stop-after 5 --out " + q(out));
+  EXPECT_EQ(stopped.exit_code, 3) << stopped.output;
+  EXPECT_NE(stopped.output.find("run the same command again to continue"), std::string::npos) << stopped.output;
+  ASSERT_TRUE(fs::exists(cp));
+  EXPECT_FALSE(fs::exists(out));
+  const nlohmann::json c = read_json_file(cp);
+  EXPECT_EQ(c["lps"].get<int>(), 5);
+  const std::string saved = read_file(cp);
+  const auto refused = [&](const std::string& args, const std::string& phrase) {
+    const testing::ToolRun b = run_tool("threshold " + q(dir_) + " --quiet --out " + q(out) + " " + args);
+    EXPECT_EQ(b.exit_code, 1) << args << "\n" << b.output;
+    EXPECT_NE(b.output.find(phrase), std::string::npos) << args << "\n" << b.output;
+    EXPECT_EQ(read_file(cp), saved) << args;
+    EXPECT_FALSE(fs::exists(out)) << args;
+  };
+  refused("--rel-tol 2e-3", "rel_tol: 0.001 there, 0.002 here");
+  refused("--between 0.025 0.05", "run without --between to continue it");
+  const testing::ToolRun resumed = run_tool("threshold " + q(dir_) + " --out " + q(out));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming from mu_s in ("), std::string::npos) << resumed.output;
+  EXPECT_FALSE(fs::exists(cp));
+  const nlohmann::json r = read_json_file(out);
+  EXPECT_EQ(r["mu_s_low"].get<double>(), w["mu_s_low"].get<double>());
+  EXPECT_EQ(r["mu_s_high"].get<double>(), w["mu_s_high"].get<double>());
+  EXPECT_EQ(r["lps"].get<int>(), 12);
+  EXPECT_EQ(r["runs"].get<int>(), 2);
+  EXPECT_EQ(r["resumed_from"][0].get<double>(), c["mu_low"].get<double>());
+  EXPECT_EQ(r["resumed_from"][1].get<double>(), c["mu_high"].get<double>());
+  EXPECT_TRUE(w["resumed_from"].is_null());
+  EXPECT_EQ(w["runs"].get<int>(), 1);
+  // A damaged checkpoint is refused and kept.
+  write_file_atomic(cp, "{\"settings\": ");
+  fs::remove(out);
+  const testing::ToolRun damaged = run_tool("threshold " + q(dir_) + " --quiet --out " + q(out));
+  EXPECT_EQ(damaged.exit_code, 1) << damaged.output;
+  EXPECT_NE(damaged.output.find("is not a threshold checkpoint"), std::string::npos) << damaged.output;
+  EXPECT_TRUE(fs::exists(cp));
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // --help gives every option's default (CLI11 prints it after the type: "--samples INT=20000").
 TEST(CliHelp, BoundsAndEnsembleShowTheirDefaults) {
   const testing::ToolRun e = run_tool("ensemble --help");

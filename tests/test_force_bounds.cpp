@@ -11,6 +11,9 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include <coin/ClpSimplex.hpp>
 
@@ -373,10 +376,11 @@ TEST(FrictionThreshold, BracketsThePackingsOwnThreshold) {
   const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
   std::vector<std::pair<double, double>> seen;
   unjam::FrictionThresholdOptions o;
-  o.progress = [&](int done, int total, double lo, double hi) {
-    EXPECT_EQ(done, static_cast<int>(seen.size()) + 1);
+  o.progress = [&](int total, const unjam::FrictionThreshold& so_far) {
+    EXPECT_EQ(so_far.lps, static_cast<int>(seen.size()) + 1);
     EXPECT_EQ(total, 12);
-    seen.emplace_back(lo, hi);
+    EXPECT_GT(so_far.iterations, 0);
+    seen.emplace_back(so_far.mu_low, so_far.mu_high);
   };
   const unjam::FrictionThreshold t = unjam::friction_threshold(sys, o);
   EXPECT_EQ(t.mu, 0.1);
@@ -526,6 +530,36 @@ TEST(FrictionThreshold, FromABracketToTheSameEnd) {
   stop.should_stop = [&polls] { return ++polls > 3; };
   EXPECT_THROW(unjam::friction_threshold(sys, stop), unjam::Cancelled);
   EXPECT_EQ(polls, 4);
+}
+
+// A bracket whose ends an earlier run checked (a checkpoint's) is not solved again: from the
+// bracket after the 5th LP of a run, 7 more LPs end on that run's bracket, to the bit. Without a
+// bracket the option is an error.
+TEST(FrictionThreshold, ACheckedBracketIsNotSolvedAgain) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p, unjam::select_contacts(p));
+  unjam::FrictionThresholdOptions whole;
+  std::vector<std::pair<double, double>> seen;
+  whole.progress = [&](int, const unjam::FrictionThreshold& r) { seen.emplace_back(r.mu_low, r.mu_high); };
+  const unjam::FrictionThreshold t = unjam::friction_threshold(sys, whole);
+  ASSERT_EQ(seen.size(), 12u);
+  unjam::FrictionThresholdOptions from;
+  std::tie(from.mu_low, from.mu_high) = seen[4];
+  from.bracket_checked = true;
+  int calls = 0;
+  from.progress = [&](int total, const unjam::FrictionThreshold& r) {
+    EXPECT_EQ(total, 7);
+    EXPECT_EQ(std::make_pair(r.mu_low, r.mu_high), seen[5 + calls]) << calls;
+    ++calls;
+  };
+  const unjam::FrictionThreshold u = unjam::friction_threshold(sys, from);
+  EXPECT_EQ(u.lps, 7);
+  EXPECT_EQ(calls, 7);
+  EXPECT_EQ(u.mu_low, t.mu_low);
+  EXPECT_EQ(u.mu_high, t.mu_high);
+  unjam::FrictionThresholdOptions bad;
+  bad.bracket_checked = true;
+  EXPECT_THROW(unjam::friction_threshold(sys, bad), unjam::Error);
 }
 
 // lattice16 (a triangular lattice: every contact's force along its normal) needs no friction:

@@ -2,13 +2,16 @@
 // coefficient at which its contacts still admit a force network (docs/ensemble.md, "The
 // friction threshold"), by bisection on the LP's feasibility (ensemble/friction_threshold).
 // Writes DIR/friction_threshold.json (or --out): the bracket, mu_s / mu, the LPs, the
-// parameters, the version and the command.
+// parameters, the version and the command. A stopped run (Ctrl-C, SIGTERM, --stop-after) keeps
+// its bracket in friction_threshold_checkpoint.json beside it (campaign/threshold_checkpoint),
+// and the same command resumes from it.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "cli/run_info.hpp"
+#include "unjam/campaign/threshold_checkpoint.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/dir_lock.hpp"
@@ -37,6 +41,7 @@ struct ThresholdOptions {
   double gap_tol = 1e-9;   // touching contacts: gap < gap_tol (R_max)
   double fn_tol = 1e-9;    // force-carrying contacts: fn > fn_tol F0
   std::vector<double> between;  // LO HI: a bracket to start from
+  int stop_after = 0;           // stop after this many LPs of this run (0: never), as Ctrl-C
   bool quiet = false;
 };
 
@@ -48,8 +53,10 @@ std::string bracket_text(double lo, double hi) {
 }
 
 // friction_threshold.json: the bracket, the parameters, the LPs, the version and the command.
+// `resumed`: the checkpoint's progress this run started from, if any; r holds every run's LPs.
 nlohmann::ordered_json threshold_json(const ThresholdOptions& opt, const Packing& packing, const EquilibriumSystem& sys,
-                                      const FrictionThresholdOptions& o, const FrictionThreshold& r, double total_s) {
+                                      const FrictionThresholdOptions& o, const FrictionThreshold& r, double total_s,
+                                      const std::optional<ThresholdProgress>& resumed) {
   return {
       {"program_version", kVersion},
       {"command", command_line()},
@@ -68,34 +75,68 @@ nlohmann::ordered_json threshold_json(const ThresholdOptions& opt, const Packing
         {"lp_tolerance", o.tolerance}, {"lp_method", "dual simplex"}}},
       {"lps", r.lps},
       {"simplex_iterations", r.iterations},
+      {"runs", resumed ? resumed->runs + 1 : 1},
+      {"resumed_from", resumed ? nlohmann::ordered_json{resumed->mu_low, resumed->mu_high} : nlohmann::ordered_json()},
       {"timings_s", {{"lp", r.seconds}, {"total", total_s}}},
   };
 }
 
-// The bisection with a progress line per LP (stderr), stopped by Ctrl-C or SIGTERM between two
-// LPs: then Interrupted (exit code 3) with the bracket reached and the option that continues it.
-FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& sys, FrictionThresholdOptions& o) {
+// The bisection with a progress line per LP (stderr), stopped by Ctrl-C, SIGTERM or --stop-after
+// between two LPs: then Interrupted (exit code 3) with the bracket reached. Once both ends of the
+// bracket are checked, it is saved in the checkpoint after every LP, and a run of the same
+// settings resumes from it (its LPs, iterations and time added to the result's).
+FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& sys, FrictionThresholdOptions& o,
+                         const ThresholdCheckpoint& checkpoint) {
   o.rel_tol = opt.rel_tol;
-  if (!opt.between.empty()) {
+  const std::optional<ThresholdProgress>& resumed = checkpoint.resumed();
+  if (resumed && !opt.between.empty())
+    throw Error(checkpoint.file().string() + " holds the bracket of a stopped run; run without --between to "
+                "continue it, or remove it to start from --between");
+  if (resumed) {
+    o.mu_low = resumed->mu_low;
+    o.mu_high = resumed->mu_high;
+    o.bracket_checked = true;
+    std::fprintf(stderr, "threshold: resuming from %s (%s: %d LPs in %d run%s)\n",
+                 bracket_text(resumed->mu_low, resumed->mu_high).c_str(), checkpoint.file().string().c_str(),
+                 resumed->lps, resumed->runs, resumed->runs == 1 ? "" : "s");
+  } else if (!opt.between.empty()) {
     o.mu_low = opt.between[0];
     o.mu_high = opt.between[1];
   }
+  const ThresholdProgress before = resumed.value_or(ThresholdProgress{});
   double lo = std::isnan(o.mu_low) ? 0.0 : o.mu_low, hi = std::isnan(o.mu_high) ? sys.mu : o.mu_high;
+  bool saved = false;
+  int lps = 0;
   const auto t_lp = std::chrono::steady_clock::now();
-  o.progress = [&](int done, int total, double l, double h) {
+  o.progress = [&](int total, const FrictionThreshold& so_far) {
+    const int done = so_far.lps;
+    const double l = so_far.mu_low, h = so_far.mu_high;
     lo = l;
     hi = h;
-    if (opt.quiet) return;
+    lps = done;
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_lp).count();
+    if ((resumed || done >= 2) && h > l) {  // both ends checked
+      checkpoint.save({l, h, before.lps + done, before.iterations + so_far.iterations,
+                       before.seconds + so_far.seconds, before.runs + 1});
+      saved = true;
+    }
+    if (opt.quiet) return;
     std::fprintf(stderr, "threshold: %d / %d LPs, %s, %s elapsed, ETA %s\n", done, total,
                  bracket_text(l, h).c_str(), format_duration(t).c_str(),
                  format_duration(t * (total - done) / done).c_str());
   };
-  o.should_stop = InterruptGuard::requested;
+  o.should_stop = [&] { return InterruptGuard::requested() || (opt.stop_after > 0 && lps >= opt.stop_after); };
   try {
     const InterruptGuard interrupts;
-    return friction_threshold(sys, o);
+    FrictionThreshold r = friction_threshold(sys, o);
+    r.lps += before.lps;
+    r.iterations += before.iterations;
+    r.seconds += before.seconds;
+    return r;
   } catch (const Cancelled&) {
+    if (saved)
+      throw Interrupted("stopped with " + bracket_text(lo, hi) + "; run the same command again to continue from it (" +
+                        checkpoint.file().string() + ")");
     char buf[64];
     std::snprintf(buf, sizeof buf, "--between %.17g %.17g", lo, hi);
     throw Interrupted("stopped with " + bracket_text(lo, hi) + "; add " + buf + " to continue from it");
@@ -110,10 +151,14 @@ void run_threshold(const ThresholdOptions& opt) {
       opt.out.empty() ? std::filesystem::path(opt.dir) / "friction_threshold.json" : std::filesystem::path(opt.out);
   const DirLock lock(out.parent_path().empty() ? "." : out.parent_path(), command_line());
   const EquilibriumSystem sys = admissible_system(packing, opt.gap_tol, opt.fn_tol);
+  const ThresholdCheckpoint checkpoint(
+      out.parent_path() / (out.stem().string() + "_checkpoint.json"),
+      threshold_checkpoint_settings(packing, opt.gap_tol, opt.fn_tol, sys.num_contacts(), sys.mu, opt.rel_tol));
   FrictionThresholdOptions o;
-  const FrictionThreshold r = bisect(opt, sys, o);
+  const FrictionThreshold r = bisect(opt, sys, o, checkpoint);
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  write_file_atomic(out, threshold_json(opt, packing, sys, o, r, total_s).dump(2) + "\n");
+  write_file_atomic(out, threshold_json(opt, packing, sys, o, r, total_s, checkpoint.resumed()).dump(2) + "\n");
+  checkpoint.remove();
   std::printf("friction threshold %s", bracket_text(r.mu_low, r.mu_high).c_str());
   if (r.mu > 0.0) std::printf(", mu_s / mu = %.4g (mu = %.6g)", r.mu_high / r.mu, r.mu);
   std::printf("\ncontacts used      %d of %zu (grains with contacts %zu)\n", sys.num_contacts(),
@@ -138,6 +183,10 @@ void add_threshold_command(CLI::App& app) {
                   "LO HI: start from this bracket (no network at LO, one at HI; both checked), as a "
                   "stopped run prints it")
       ->expected(2)->check(non_negative_number());
+  cmd->add_option("--stop-after", opt->stop_after,
+                  "stop after this many LPs, keeping the bracket reached in the checkpoint (as Ctrl-C; run "
+                  "again to resume)")
+      ->check(non_negative_number());
   add_contact_selection_options(cmd, opt->gap_tol, opt->fn_tol);
   cmd->add_flag("--quiet", opt->quiet, "no progress lines");
   cmd->callback([opt] { run_threshold(*opt); });

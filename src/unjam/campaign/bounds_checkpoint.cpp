@@ -48,11 +48,10 @@ long long known_values(const ForceBounds& b) {
 BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
     : file_(std::move(file)), settings_(std::move(settings)) {
   require_writable(file_);  // before any LP, not at the first save
-  if (!std::filesystem::exists(file_)) return;
+  const std::optional<nlohmann::json> read = read_checkpoint(file_, settings_, "bounds checkpoint");
+  if (!read) return;
+  const nlohmann::json& j = *read;
   const std::string name = file_.string();
-  const auto j = nlohmann::json::parse(read_file(file_), nullptr, false);
-  if (j.is_discarded() || !j.is_object()) throw Error(name + " is not a bounds checkpoint (not a JSON object); remove it to start over");
-  require_same_settings(j.value("settings", nlohmann::json{}), settings_, name);
   auto b = std::make_shared<ForceBounds>();
   try {
     b->fn_min = values_of(j.at("fn_min"));

@@ -1,13 +1,16 @@
 #pragma once
 // A checkpoint is resumed only by the run it belongs to: the settings it saved must equal the
-// present run's (probe and bounds checkpoints). Where they do not, the error names every
+// present run's (probe, bounds and threshold checkpoints). Where they do not, the error names every
 // setting that differs, so that the run can be repeated with the checkpoint's settings
 // instead of started over.
+#include <filesystem>
+#include <optional>
 #include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 
 namespace unjam {
@@ -39,6 +42,19 @@ inline void require_same_settings(const nlohmann::json& saved, const nlohmann::j
   const std::string diff = settings_differences(saved, now, "there", "here");
   throw Error(name + " belongs to a run with other settings" + (diff.empty() ? "" : " (" + diff + ")") +
               "; give its settings to resume it, or remove it to start over");
+}
+
+// The checkpoint in `file`, if there is one: its JSON object, once its "settings" passed
+// require_same_settings against `settings`. Throws unjam::Error where the file is not a JSON
+// object ("<file> is not a <what> (not a JSON object); remove it to start over").
+inline std::optional<nlohmann::json> read_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings,
+                                                     const std::string& what) {
+  if (!std::filesystem::exists(file)) return std::nullopt;
+  auto j = nlohmann::json::parse(read_file(file), nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw Error(file.string() + " is not a " + what + " (not a JSON object); remove it to start over");
+  require_same_settings(j.value("settings", nlohmann::json{}), settings, file.string());
+  return j;
 }
 
 }  // namespace unjam

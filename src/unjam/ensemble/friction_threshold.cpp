@@ -33,14 +33,17 @@ FrictionThreshold friction_threshold(const EquilibriumSystem& system, const Fric
   if (bracket_given && !(options.mu_low >= 0.0 && options.mu_high > options.mu_low && std::isfinite(options.mu_high)))
     throw Error("friction threshold: a bracket needs 0 <= mu_low < mu_high (got " + number(options.mu_low) +
                 ", " + number(options.mu_high) + ")");
+  if (options.bracket_checked && !bracket_given)
+    throw Error("friction threshold: bracket_checked needs a bracket (mu_low, mu_high)");
   const auto t0 = std::chrono::steady_clock::now();
   FrictionThreshold r;
   r.mu = system.mu;
   r.mu_low = bracket_given ? options.mu_low : 0.0;
   r.mu_high = bracket_given ? options.mu_high : system.mu;
   const double resolution = options.rel_tol * std::max(system.mu, r.mu_high);
-  // Two LPs at the ends, then the bisection's.
-  const int total = 2 + steps_to(r.mu_high - r.mu_low, resolution);
+  // Two LPs at the ends (none where they are known), then the bisection's.
+  const bool ends_known = options.bracket_checked;
+  const int total = (ends_known ? 0 : 2) + steps_to(r.mu_high - r.mu_low, resolution);
   EquilibriumSystem at = system;  // the rows do not depend on mu; only the cones change
   // Each LP at mu > 0 starts from the last one's basis (the same columns for every mu > 0); the
   // LP at 0, with one cone column per contact, from scratch, leaving that basis as it was.
@@ -56,31 +59,35 @@ FrictionThreshold friction_threshold(const EquilibriumSystem& system, const Fric
     return yes;
   };
   const auto report = [&] {
-    if (options.progress) options.progress(r.lps, total, r.mu_low, r.mu_high);
+    if (!options.progress) return;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    options.progress(total, r);
   };
-  if (!admissible_at(r.mu_high))
-    throw Error(bracket_given
-                    ? "friction threshold: the admissible set is empty at mu_high = " + number(r.mu_high) +
-                          ": the threshold lies above it"
-                    : "friction threshold: no admissible force network at the packing's own mu = " +
-                          number(system.mu) +
-                          "; is the packing static and its contact list complete (try a larger --gap-tol)?");
-  report();
-  if (r.mu_high == 0.0) {
-    r.mu_low = 0.0;  // a frictionless system whose set is not empty: mu_s = 0
-  } else if (admissible_at(r.mu_low)) {
-    if (r.mu_low > 0.0)
-      throw Error("friction threshold: the admissible set is not empty at mu_low = " + number(r.mu_low) +
-                  ": the threshold lies at or below it");
-    r.mu_high = 0.0;  // not empty without friction: mu_s = 0
+  if (!ends_known) {
+    if (!admissible_at(r.mu_high))
+      throw Error(bracket_given
+                      ? "friction threshold: the admissible set is empty at mu_high = " + number(r.mu_high) +
+                            ": the threshold lies above it"
+                      : "friction threshold: no admissible force network at the packing's own mu = " +
+                            number(system.mu) +
+                            "; is the packing static and its contact list complete (try a larger --gap-tol)?");
     report();
-  } else {
-    report();
-    while (r.mu_high - r.mu_low > resolution) {
-      const double mid = 0.5 * (r.mu_low + r.mu_high);
-      (admissible_at(mid) ? r.mu_high : r.mu_low) = mid;
+    if (r.mu_high == 0.0) {
+      r.mu_low = 0.0;  // a frictionless system whose set is not empty: mu_s = 0
+    } else if (admissible_at(r.mu_low)) {
+      if (r.mu_low > 0.0)
+        throw Error("friction threshold: the admissible set is not empty at mu_low = " + number(r.mu_low) +
+                    ": the threshold lies at or below it");
+      r.mu_high = 0.0;  // not empty without friction: mu_s = 0
+      report();
+    } else {
       report();
     }
+  }
+  while (r.mu_high - r.mu_low > resolution) {  // none where mu_s = 0
+    const double mid = 0.5 * (r.mu_low + r.mu_high);
+    (admissible_at(mid) ? r.mu_high : r.mu_low) = mid;
+    report();
   }
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

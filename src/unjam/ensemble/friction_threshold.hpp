@@ -15,6 +15,8 @@
 
 namespace unjam {
 
+struct FrictionThreshold;
+
 struct FrictionThresholdOptions {
   // Stop once mu_high - mu_low <= rel_tol * max(mu, mu_high of the start): the threshold to a
   // fraction rel_tol of the packing's own coefficient. In (0, 1).
@@ -25,9 +27,12 @@ struct FrictionThresholdOptions {
   // NaN (the default): the bracket [0, mu] of the system's own coefficient.
   double mu_low = std::numeric_limits<double>::quiet_NaN();
   double mu_high = std::numeric_limits<double>::quiet_NaN();
-  // Called after every LP with (LPs so far, LPs in all, mu_low, mu_high of the bracket so far);
-  // may be empty.
-  std::function<void(int, int, double, double)> progress;
+  // The bracket's ends are known, both checked by an earlier run of the same bisection (its
+  // checkpoint, `unjam threshold`): the bisection goes on without solving them again.
+  bool bracket_checked = false;
+  // Called after every LP with the LPs this run will solve in all and the result so far (its
+  // bracket, LPs, iterations and seconds); may be empty.
+  std::function<void(int total, const FrictionThreshold& so_far)> progress;
   // Polled before every LP; once it returns true, friction_threshold throws unjam::Cancelled.
   // May be empty.
   std::function<bool()> should_stop;

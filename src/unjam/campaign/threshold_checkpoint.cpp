@@ -1,0 +1,61 @@
+#include "unjam/campaign/threshold_checkpoint.hpp"
+
+#include <utility>
+
+#include "unjam/core/atomic_file.hpp"
+#include "unjam/core/checkpoint_settings.hpp"
+#include "unjam/core/error.hpp"
+#include "unjam/packing/packing_io.hpp"
+
+namespace unjam {
+
+nlohmann::json threshold_checkpoint_settings(const Packing& packing, double gap_tol, double fn_tol,
+                                             int contacts, double mu, double rel_tol) {
+  return {{"packing_fingerprint", packing_fingerprint(packing)},
+          {"gap_tol", gap_tol},
+          {"fn_tol", fn_tol},
+          {"contacts", contacts},
+          {"mu", mu},
+          {"rel_tol", rel_tol}};
+}
+
+ThresholdCheckpoint::ThresholdCheckpoint(std::filesystem::path file, nlohmann::json settings)
+    : file_(std::move(file)), settings_(std::move(settings)) {
+  require_writable(file_);  // before any LP, not at the first save
+  const std::optional<nlohmann::json> read = read_checkpoint(file_, settings_, "threshold checkpoint");
+  if (!read) return;
+  const nlohmann::json& j = *read;
+  const std::string name = file_.string();
+  ThresholdProgress p;
+  try {
+    p.mu_low = j.at("mu_low").get<double>();
+    p.mu_high = j.at("mu_high").get<double>();
+    p.lps = j.at("lps").get<int>();
+    p.iterations = j.at("simplex_iterations").get<long long>();
+    p.seconds = j.at("lp_seconds").get<double>();
+    p.runs = j.at("runs").get<int>();
+  } catch (const std::exception& e) {
+    throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
+  }
+  if (!(p.mu_low >= 0.0 && p.mu_high > p.mu_low && p.mu_high <= settings_.value("mu", 0.0)))
+    throw Error(name + " is damaged (its bracket is not 0 <= mu_low < mu_high <= mu); remove it to start over");
+  resumed_ = p;
+}
+
+void ThresholdCheckpoint::save(const ThresholdProgress& p) const {
+  write_file_atomic(file_, nlohmann::json{{"settings", settings_},
+                                          {"mu_low", p.mu_low},
+                                          {"mu_high", p.mu_high},
+                                          {"lps", p.lps},
+                                          {"simplex_iterations", p.iterations},
+                                          {"lp_seconds", p.seconds},
+                                          {"runs", p.runs}}
+                               .dump());
+}
+
+void ThresholdCheckpoint::remove() const {
+  std::error_code ec;
+  std::filesystem::remove(file_, ec);
+}
+
+}  // namespace unjam

@@ -1,0 +1,56 @@
+#pragma once
+// The checkpoint of a run of the friction threshold's bisection (ensemble/friction_threshold;
+// `unjam threshold`): a JSON file with what identifies the run ("settings"), the bracket
+// (mu_low, mu_high] reached, both ends checked, and the LPs, simplex iterations and LP time
+// spent on it. A run stopped (Ctrl-C, SIGTERM, --stop-after) keeps it, and the same run
+// resumes from it without solving the ends again; the bracket it then reaches is that of one
+// uninterrupted run (docs/ensemble.md, "The friction threshold").
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "unjam/ensemble/friction_threshold.hpp"
+#include "unjam/packing/packing.hpp"
+
+namespace unjam {
+
+// What identifies a run of the bisection: the packing's contents ("packing_fingerprint"), the
+// admissible set (gap_tol in R_max, fn_tol in F0, its number of contacts), the packing's own
+// mu and rel_tol.
+nlohmann::json threshold_checkpoint_settings(const Packing& packing, double gap_tol, double fn_tol,
+                                             int contacts, double mu, double rel_tol);
+
+// A bracket with both ends checked, and what it cost.
+struct ThresholdProgress {
+  double mu_low = 0.0, mu_high = 0.0;
+  int lps = 0;
+  long long iterations = 0;
+  double seconds = 0.0;  // LP wall time
+  int runs = 0;          // runs that made it
+};
+
+// A checkpoint file and the run it belongs to. Constructing it checks that the file can be
+// written (unjam::Error if not) and reads it if it is there: one of other settings is refused
+// (unjam::Error naming the settings that differ, core/checkpoint_settings), as is one that is
+// not a checkpoint or whose bracket is not 0 <= mu_low < mu_high; the file is then kept.
+class ThresholdCheckpoint {
+ public:
+  ThresholdCheckpoint(std::filesystem::path file, nlohmann::json settings);
+
+  const std::filesystem::path& file() const { return file_; }
+  // The progress read from the file, if there was one.
+  const std::optional<ThresholdProgress>& resumed() const { return resumed_; }
+  // Writes the file (atomically).
+  void save(const ThresholdProgress& p) const;
+  // Removes the file, if there is one.
+  void remove() const;
+
+ private:
+  std::filesystem::path file_;
+  nlohmann::json settings_;
+  std::optional<ThresholdProgress> resumed_;
+};
+
+}  // namespace unjam
