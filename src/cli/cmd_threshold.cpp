@@ -76,7 +76,8 @@ nlohmann::ordered_json threshold_json(const ThresholdOptions& opt, const Packing
       {"lps", r.lps},
       {"simplex_iterations", r.iterations},
       {"runs", resumed ? resumed->runs + 1 : 1},
-      {"resumed_from", resumed ? nlohmann::ordered_json{resumed->mu_low, resumed->mu_high} : nlohmann::ordered_json()},
+      {"resumed_from",
+       resumed ? nlohmann::ordered_json{resumed->so_far.mu_low, resumed->so_far.mu_high} : nlohmann::ordered_json()},
       {"timings_s", {{"lp", r.seconds}, {"total", total_s}}},
   };
 }
@@ -93,17 +94,24 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
     throw Error(checkpoint.file().string() + " holds the bracket of a stopped run; run without --between to "
                 "continue it, or remove it to start from --between");
   if (resumed) {
-    o.mu_low = resumed->mu_low;
-    o.mu_high = resumed->mu_high;
+    o.mu_low = resumed->so_far.mu_low;
+    o.mu_high = resumed->so_far.mu_high;
     o.bracket_checked = true;
     std::fprintf(stderr, "threshold: resuming from %s (%s: %d LPs in %d run%s)\n",
-                 bracket_text(resumed->mu_low, resumed->mu_high).c_str(), checkpoint.file().string().c_str(),
-                 resumed->lps, resumed->runs, resumed->runs == 1 ? "" : "s");
+                 bracket_text(o.mu_low, o.mu_high).c_str(), checkpoint.file().string().c_str(),
+                 resumed->so_far.lps, resumed->runs, resumed->runs == 1 ? "" : "s");
   } else if (!opt.between.empty()) {
     o.mu_low = opt.between[0];
     o.mu_high = opt.between[1];
   }
   const ThresholdProgress before = resumed.value_or(ThresholdProgress{});
+  // This run's result with the earlier runs' LPs, iterations and LP time added.
+  const auto with_earlier = [&before](FrictionThreshold r) {
+    r.lps += before.so_far.lps;
+    r.iterations += before.so_far.iterations;
+    r.seconds += before.so_far.seconds;
+    return r;
+  };
   double lo = std::isnan(o.mu_low) ? 0.0 : o.mu_low, hi = std::isnan(o.mu_high) ? sys.mu : o.mu_high;
   bool saved = false;
   int lps = 0;
@@ -116,8 +124,7 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
     lps = done;
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_lp).count();
     if ((resumed || done >= 2) && h > l) {  // both ends checked
-      checkpoint.save({l, h, before.lps + done, before.iterations + so_far.iterations,
-                       before.seconds + so_far.seconds, before.runs + 1});
+      checkpoint.save({with_earlier(so_far), before.runs + 1});
       saved = true;
     }
     if (opt.quiet) return;
@@ -128,11 +135,7 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
   o.should_stop = [&] { return InterruptGuard::requested() || (opt.stop_after > 0 && lps >= opt.stop_after); };
   try {
     const InterruptGuard interrupts;
-    FrictionThreshold r = friction_threshold(sys, o);
-    r.lps += before.lps;
-    r.iterations += before.iterations;
-    r.seconds += before.seconds;
-    return r;
+    return with_earlier(friction_threshold(sys, o));
   } catch (const Cancelled&) {
     if (saved)
       throw Interrupted("stopped with " + bracket_text(lo, hi) + "; run the same command again to continue from it (" +

@@ -27,28 +27,31 @@ ThresholdCheckpoint::ThresholdCheckpoint(std::filesystem::path file, nlohmann::j
   const nlohmann::json& j = *read;
   const std::string name = file_.string();
   ThresholdProgress p;
+  FrictionThreshold& t = p.so_far;
   try {
-    p.mu_low = j.at("mu_low").get<double>();
-    p.mu_high = j.at("mu_high").get<double>();
-    p.lps = j.at("lps").get<int>();
-    p.iterations = j.at("simplex_iterations").get<long long>();
-    p.seconds = j.at("lp_seconds").get<double>();
+    t.mu = settings_.at("mu").get<double>();
+    t.mu_low = j.at("mu_low").get<double>();
+    t.mu_high = j.at("mu_high").get<double>();
+    t.lps = j.at("lps").get<int>();
+    t.iterations = j.at("simplex_iterations").get<long long>();
+    t.seconds = j.at("lp_seconds").get<double>();
     p.runs = j.at("runs").get<int>();
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
-  if (!(p.mu_low >= 0.0 && p.mu_high > p.mu_low && p.mu_high <= settings_.value("mu", 0.0)))
+  if (!(t.mu_low >= 0.0 && t.mu_high > t.mu_low && t.mu_high <= t.mu))
     throw Error(name + " is damaged (its bracket is not 0 <= mu_low < mu_high <= mu); remove it to start over");
   resumed_ = p;
 }
 
 void ThresholdCheckpoint::save(const ThresholdProgress& p) const {
+  const FrictionThreshold& t = p.so_far;
   write_file_atomic(file_, nlohmann::json{{"settings", settings_},
-                                          {"mu_low", p.mu_low},
-                                          {"mu_high", p.mu_high},
-                                          {"lps", p.lps},
-                                          {"simplex_iterations", p.iterations},
-                                          {"lp_seconds", p.seconds},
+                                          {"mu_low", t.mu_low},
+                                          {"mu_high", t.mu_high},
+                                          {"lps", t.lps},
+                                          {"simplex_iterations", t.iterations},
+                                          {"lp_seconds", t.seconds},
                                           {"runs", p.runs}}
                                .dump());
 }

@@ -22,13 +22,11 @@ namespace unjam {
 nlohmann::json threshold_checkpoint_settings(const Packing& packing, double gap_tol, double fn_tol,
                                              int contacts, double mu, double rel_tol);
 
-// A bracket with both ends checked, and what it cost.
+// A bracket with both ends checked (so_far.mu_low, so_far.mu_high), what it cost (so_far's LPs,
+// iterations and LP seconds), and the runs that made it.
 struct ThresholdProgress {
-  double mu_low = 0.0, mu_high = 0.0;
-  int lps = 0;
-  long long iterations = 0;
-  double seconds = 0.0;  // LP wall time
-  int runs = 0;          // runs that made it
+  FrictionThreshold so_far;
+  int runs = 0;
 };
 
 // A checkpoint file and the run it belongs to. Constructing it checks that the file can be

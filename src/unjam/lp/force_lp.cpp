@@ -62,25 +62,35 @@ bool proves_empty(const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& 
   return ray != nullptr && proves_no_admissible_network(Ay, rhs, Eigen::Map<const Eigen::VectorXd>(ray, rhs.size()));
 }
 
-// What a dual simplex on the admissible set decided, checked (dual_decides).
+// What a simplex solve on the admissible set decided, checked (simplex_decides).
 enum class Verdict { network, empty, undecided };
 
-// How a dual simplex on the model's zero objective (dual feasible from any basis) decides
-// whether the admissible set has a point. CLP's verdicts are on the scaled model, and near an
-// empty set they may be wrong unscaled: an "optimal" point with cone coordinates of -2e-3 F0
-// where a ray proves the set empty (docs/ensemble.md, "The friction threshold"). So each
-// verdict is checked in the model's own units: a point by admissible_point, emptiness by
-// proves_empty on CLP's ray (which CLP does not always leave). Where the check fails, the model
-// is solved again without scaling from the basis reached, and that verdict is checked; undecided
-// where neither checks out. Throws unjam::Error, the message starting with `what`, where CLP ends
-// neither optimal nor infeasible. `iterations` accumulates.
-Verdict dual_decides(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
-                     double tolerance, const std::string& what, long long& iterations) {
-  const int scaling = model.scalingFlag();
+// How a simplex solve (`method`: &ClpSimplex::dual for the zero objective of the admissibility
+// test, dual feasible from any basis; &ClpSimplex::primal for a min / max LP from the last
+// optimum's basis) decides. CLP's verdicts are on the scaled model, and near an empty set they
+// may be wrong unscaled: an "optimal" point with cone coordinates of -2e-3 F0 where a ray
+// proves the set empty (docs/ensemble.md, "The friction threshold"), or one 4.6e-9 outside a
+// cone ("The LP"). So each verdict is checked in the model's own units: a point by
+// admissible_point, emptiness by proves_empty on CLP's ray (which CLP does not always leave).
+// Where the check fails, the model is solved again without scaling from the basis reached
+// (counted in `unscaled`), and that verdict is checked; undecided where neither checks out.
+// Throws unjam::Error, the message starting with `what`, where CLP ends neither optimal nor
+// infeasible. `iterations` and `unscaled` accumulate; the model's scaling is restored.
+Verdict simplex_decides(ClpSimplex& model, int (ClpSimplex::*method)(int, int), const Eigen::SparseMatrix<double>& Ay,
+                        const Eigen::VectorXd& rhs, double tolerance, const std::string& what, long long& iterations,
+                        long long& unscaled) {
+  struct RestoreScaling {
+    ClpSimplex& model;
+    int flag;
+    ~RestoreScaling() { model.scaling(flag); }
+  } restore{model, model.scalingFlag()};
   Verdict verdict = Verdict::undecided;
   for (int attempt = 0; attempt < 2 && verdict == Verdict::undecided; ++attempt) {
-    if (attempt == 1) model.scaling(0);
-    model.dual();
+    if (attempt == 1) {
+      model.scaling(0);
+      ++unscaled;
+    }
+    (model.*method)(0, 0);
     iterations += model.numberIterations();
     const int status = model.status();
     if (status == 0) {
@@ -94,7 +104,6 @@ Verdict dual_decides(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay, c
       throw Error(what + clp_status_text(status));
     }
   }
-  model.scaling(scaling);
   return verdict;
 }
 
@@ -135,11 +144,12 @@ Verdict elastic_decides(const Eigen::SparseMatrix<double>& Ay, const Eigen::Vect
   return admissible_point(Ay, rhs, y, tolerance) ? Verdict::network : Verdict::undecided;
 }
 
-// Whether the admissible set of the loaded `model` has a point: dual_decides, then
+// Whether the admissible set of the loaded `model` has a point: simplex_decides by dual simplex, then
 // elastic_decides where that is undecided. Throws unjam::Error where both are.
 bool decides_network(ClpSimplex& model, const Eigen::SparseMatrix<double>& Ay, const Eigen::VectorXd& rhs,
                      double tolerance, const std::string& what, long long& iterations) {
-  Verdict verdict = dual_decides(model, Ay, rhs, tolerance, what, iterations);
+  long long unscaled = 0;
+  Verdict verdict = simplex_decides(model, &ClpSimplex::dual, Ay, rhs, tolerance, what, iterations, unscaled);
   if (verdict == Verdict::undecided) verdict = elastic_decides(Ay, rhs, tolerance, what, iterations);
   if (verdict == Verdict::undecided)
     throw Error(what + "undecided: neither CLP's point nor a certificate of emptiness checks out in the "
@@ -266,46 +276,6 @@ ForceLP::ForceLP(const ForceLP& other)
 
 ForceLP::~ForceLP() = default;
 
-// Primal simplex from the model's basis (the last optimum's, or the barrier's point), its
-// optimum checked as the first solve's is (dual_decides): the point must pass admissible_point
-// in the model's own units, else the model is solved again without scaling from the basis
-// reached. The set is not empty (the constructor found a checked point), so an infeasible end
-// is a wrong verdict of the scaled model and gets the same second solve; a ray that proves the
-// set empty (the band below a friction threshold where a point passes the row check while no
-// network exists, docs/ensemble.md) throws "no admissible force network". false where neither
-// solve ends at a checked point; throws unjam::Error, the message starting with `what`, where
-// CLP ends neither optimal nor infeasible.
-bool ForceLP::primal_decides(ClpSimplex& model, const std::string& what) {
-  const int scaling = model.scalingFlag();
-  bool solved = false;
-  for (int attempt = 0; attempt < 2 && !solved; ++attempt) {
-    if (attempt == 1) {
-      model.scaling(0);
-      ++unscaled_solves_;
-    }
-    model.primal();
-    iterations_ += model.numberIterations();
-    const int status = model.status();
-    if (status == 0) {
-      const Eigen::Map<const Eigen::VectorXd> y(model.primalColumnSolution(), model.numberColumns());
-      solved = admissible_point(Ay_, system_->rhs, y, tolerance_);
-    } else if (status == 1) {
-      double* ray = model.infeasibilityRay();
-      const bool empty = proves_empty(Ay_, system_->rhs, ray);
-      delete[] ray;
-      if (empty) {
-        model.scaling(scaling);
-        throw no_admissible_network(*system_);
-      }
-    } else {
-      model.scaling(scaling);
-      throw Error(what + clp_status_text(status));
-    }
-  }
-  model.scaling(scaling);
-  return solved;
-}
-
 double ForceLP::optimize(int k, double direction) {
   if (k < 0 || k >= system_->num_contacts())
     throw Error("force bounds LP: contact " + std::to_string(k) + " out of range");
@@ -334,11 +304,21 @@ double ForceLP::optimize(int k, double direction) {
     solved = end != BarrierEnd::failed && admissible_point(Ay_, system_->rhs, y, tolerance_);
     simplex_finishes_ += !solved;
   }
-  const std::string what = "force bounds LP: " + std::string(direction > 0 ? "min" : "max") +
-                           " of fn of contact " + std::to_string(k) + " ";
-  if (!solved) solved = primal_decides(model, what);
+  const auto what = [&] {  // the start of an error message, made only where one may be needed
+    return "force bounds LP: " + std::string(direction > 0 ? "min" : "max") + " of fn of contact " +
+           std::to_string(k) + " ";
+  };
+  if (!solved) {  // the simplex method, or a barrier point finished by simplex
+    // The set is not empty (the constructor found a checked point): an empty verdict here is
+    // the band below a friction threshold where a point passes the row check while no network
+    // exists (docs/ensemble.md), and it is reported as such.
+    const Verdict v = simplex_decides(model, &ClpSimplex::primal, Ay_, system_->rhs, tolerance_, what(),
+                                      iterations_, unscaled_solves_);
+    if (v == Verdict::empty) throw no_admissible_network(*system_);
+    solved = v == Verdict::network;
+  }
   if (!solved)
-    throw Error(what + "ends " + clp_status_text(model.status()) +
+    throw Error(what() + "ends " + clp_status_text(model.status()) +
                 (model.status() == 0 ? " at a point that is not admissible in the model's own units "
                                        "(with scaling and without)"
                                      : ""));

@@ -9,7 +9,6 @@
 // (ensemble/force_bounds) and the fast probe (probe/kinematic_probe: F_crit = max fn_k,
 // docs/probe.md, "The fast method") both solve them.
 #include <memory>
-#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -131,7 +130,6 @@ class ForceLP {
 
  private:
   double optimize(int k, double direction);
-  bool primal_decides(ClpSimplex& model, const std::string& what);
 
   const EquilibriumSystem* system_;
   LpMethod method_;
