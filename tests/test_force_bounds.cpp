@@ -18,6 +18,7 @@
 #include <coin/ClpSimplex.hpp>
 
 #include "unjam/campaign/bounds_checkpoint.hpp"
+#include "unjam/campaign/threshold_checkpoint.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -687,6 +688,21 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   unjam::BoundsCheckpoint(file, settings).save(partial, {});
   edited([](nlohmann::json& j) { j.erase("iterations"); });
   refused(settings, "damaged");
+  // Counts out of their type's range or negative, and a negative minimum: refused, not cast.
+  for (const auto& [key, value, why] :
+       {std::tuple{"iterations", nlohmann::json(1e300), "iterations must be an integer"},
+        std::tuple{"min_lps_skipped", nlohmann::json(2.5), "min_lps_skipped must be an integer"},
+        std::tuple{"unscaled_solves", nlohmann::json(-1), "its counts are not"},
+        std::tuple{"min_lps_skipped", nlohmann::json(Nc + 1), "its counts are not"}}) {
+    fs::remove(file);
+    unjam::BoundsCheckpoint(file, settings).save(partial, {});
+    edited([&](nlohmann::json& j) { j[key] = value; });
+    refused(settings, why);
+  }
+  fs::remove(file);
+  unjam::BoundsCheckpoint(file, settings).save(partial, {});
+  edited([](nlohmann::json& j) { j["fn_min"][2] = -0.5; });
+  refused(settings, "a negative fn_min");
   unjam::write_file_atomic(file, "{\"settings\": ");
   refused(settings, "not a bounds checkpoint");
   fs::remove(file);
@@ -706,6 +722,68 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   }
   EXPECT_EQ(unjam::read_file(blocker), "a file");
   fs::remove(blocker);
+}
+
+// The threshold's checkpoint reads back what it saved; a bracket that is not
+// 0 <= mu_low < mu_high <= mu, counts out of their type's range or negative, and a file that is
+// not a checkpoint are refused with the file's name, and the file kept.
+TEST(ThresholdCheckpoint, ReadsBackWhatItSavedAndRefusesDamagedFiles) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const fs::path file = fs::temp_directory_path() / "unjam_test_threshold_checkpoint.json";
+  fs::remove(file);
+  const auto settings = unjam::threshold_checkpoint_settings(p, 1e-9, 1e-9, 81, 0.1, 1e-3);
+  unjam::ThresholdProgress saved;
+  saved.so_far.mu_low = 0.05;
+  saved.so_far.mu_high = 0.075;
+  saved.so_far.lps = 4;
+  saved.so_far.iterations = 321;
+  saved.so_far.seconds = 0.25;
+  saved.runs = 2;
+  {
+    const unjam::ThresholdCheckpoint c(file, settings);
+    EXPECT_FALSE(c.resumed().has_value());
+    c.save(saved);
+  }
+  {
+    const unjam::ThresholdCheckpoint c(file, settings);
+    ASSERT_TRUE(c.resumed().has_value());
+    const unjam::FrictionThreshold& t = c.resumed()->so_far;
+    EXPECT_EQ(t.mu, 0.1);  // the run's own mu, from its settings
+    EXPECT_EQ(t.mu_low, 0.05);
+    EXPECT_EQ(t.mu_high, 0.075);
+    EXPECT_EQ(t.lps, 4);
+    EXPECT_EQ(t.iterations, 321);
+    EXPECT_EQ(t.seconds, 0.25);
+    EXPECT_EQ(c.resumed()->runs, 2);
+  }
+  const auto refused_after = [&](const std::function<void(nlohmann::json&)>& edit, const std::string& why) {
+    fs::remove(file);
+    unjam::ThresholdCheckpoint(file, settings).save(saved);
+    auto j = nlohmann::json::parse(unjam::read_file(file));
+    edit(j);
+    const std::string before = j.dump();
+    unjam::write_file_atomic(file, before);
+    try {
+      unjam::ThresholdCheckpoint c(file, settings);
+      ADD_FAILURE() << "accepted; expected: " << why;
+    } catch (const unjam::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(unjam::read_file(file), before);
+  };
+  refused_after([](nlohmann::json& j) { j["mu_high"] = 0.2; }, "its bracket is not");
+  refused_after([](nlohmann::json& j) { j["mu_low"] = 0.075; }, "its bracket is not");
+  refused_after([](nlohmann::json& j) { j["mu_low"] = -0.01; }, "its bracket is not");
+  refused_after([](nlohmann::json& j) { j["lps"] = 1e300; }, "lps must be an integer");
+  refused_after([](nlohmann::json& j) { j["runs"] = 1.5; }, "runs must be an integer");
+  refused_after([](nlohmann::json& j) { j["simplex_iterations"] = -3; }, "its counts are not");
+  refused_after([](nlohmann::json& j) { j["lp_seconds"] = -1.0; }, "its counts are not");
+  refused_after([](nlohmann::json& j) { j["runs"] = 0; }, "its counts are not");
+  refused_after([](nlohmann::json& j) { j.erase("lp_seconds"); }, "damaged");
+  refused_after([](nlohmann::json& j) { j["settings"]["rel_tol"] = 2e-3; }, "rel_tol: 0.002 there, 0.001 here");
+  refused_after([](nlohmann::json& j) { j = nlohmann::json::array(); }, "not a threshold checkpoint");
+  fs::remove(file);
 }
 
 TEST(ForceBounds, CommandWritesCsvAndJson) {

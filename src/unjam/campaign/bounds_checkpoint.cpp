@@ -7,6 +7,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace unjam {
@@ -56,12 +57,15 @@ BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json se
   try {
     b->fn_min = values_of(j.at("fn_min"));
     b->fn_max = values_of(j.at("fn_max"));
-    b->min_lps_skipped = j.at("min_lps_skipped").get<int>();
-    b->iterations = j.at("iterations").get<long long>();
-    b->loosened_solves = j.at("loosened_solves").get<long long>();
+    b->min_lps_skipped = json_integer<int>(j.at("min_lps_skipped"), "min_lps_skipped");
+    b->iterations = json_integer<long long>(j.at("iterations"), "iterations");
+    b->loosened_solves = json_integer<long long>(j.at("loosened_solves"), "loosened_solves");
     // Checkpoints written before these counts were kept: 0.
-    b->simplex_finishes = j.value("simplex_finishes", 0LL);
-    b->unscaled_solves = j.value("unscaled_solves", 0LL);
+    const auto count_or_zero = [&j](const char* key) {
+      return j.contains(key) ? json_integer<long long>(j.at(key), key) : 0LL;
+    };
+    b->simplex_finishes = count_or_zero("simplex_finishes");
+    b->unscaled_solves = count_or_zero("unscaled_solves");
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
@@ -69,6 +73,13 @@ BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json se
   if (b->fn_min.size() != contacts || b->fn_max.size() != contacts)
     throw Error(name + " is damaged (" + std::to_string(b->fn_max.size()) + " values for " +
                 std::to_string(contacts) + " contacts); remove it to start over");
+  if (b->min_lps_skipped < 0 || b->min_lps_skipped > contacts || b->iterations < 0 || b->loosened_solves < 0 ||
+      b->simplex_finishes < 0 || b->unscaled_solves < 0)
+    throw Error(name + " is damaged (its counts are not 0 <= min_lps_skipped <= contacts and >= 0 otherwise); " +
+                "remove it to start over");
+  // A minimum known is 0 (opened) or positive (ensemble/force_bounds); NaN: not known yet.
+  if ((b->fn_min.array() < 0.0).any())
+    throw Error(name + " is damaged (a negative fn_min); remove it to start over");
   b->complete = false;
   earlier_ = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(*b));
   resumed_ = std::move(b);

@@ -5,6 +5,7 @@
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/checkpoint_settings.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 #include "unjam/packing/packing_io.hpp"
 
 namespace unjam {
@@ -32,13 +33,17 @@ ThresholdCheckpoint::ThresholdCheckpoint(std::filesystem::path file, nlohmann::j
     t.mu = settings_.at("mu").get<double>();
     t.mu_low = j.at("mu_low").get<double>();
     t.mu_high = j.at("mu_high").get<double>();
-    t.lps = j.at("lps").get<int>();
-    t.iterations = j.at("simplex_iterations").get<long long>();
+    t.lps = json_integer<int>(j.at("lps"), "lps");
+    t.iterations = json_integer<long long>(j.at("simplex_iterations"), "simplex_iterations");
     t.seconds = j.at("lp_seconds").get<double>();
-    p.runs = j.at("runs").get<int>();
+    p.runs = json_integer<int>(j.at("runs"), "runs");
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
+  // JSON holds no NaN or infinity, so every number read is finite.
+  if (t.lps < 0 || t.iterations < 0 || !(t.seconds >= 0.0) || p.runs < 1)
+    throw Error(name + " is damaged (its counts are not lps >= 0, simplex_iterations >= 0, lp_seconds >= 0, " +
+                "runs >= 1); remove it to start over");
   if (!(t.mu_low >= 0.0 && t.mu_high > t.mu_low && t.mu_high <= t.mu))
     throw Error(name + " is damaged (its bracket is not 0 <= mu_low < mu_high <= mu); remove it to start over");
   resumed_ = p;
