@@ -456,5 +456,68 @@ TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {
   EXPECT_FALSE(fs::exists(d / "probe_summary.json"));
 }
 
+// `unjam merge` refuses a damaged shard file with its name, the reason and the job to run again
+// (exit code 1), and writes nothing: a contact out of range (written out of bounds before), one
+// of another shard or listed twice, values missing or of the wrong type, counts that are not
+// non-negative integers, negative times, a file that is not an object, files numbered beyond
+// the job array. The shards as written merge.
+TEST_F(CliReliability, MergeRefusesDamagedShardsByNameAndWritesNothing) {
+  const fs::path d = copy("p50-mu0.1", "d");
+  const fs::path b = root_ / "bounds", pr = root_ / "probe";
+  for (int i = 0; i < 2; ++i) {
+    const std::string shard = " --shard " + std::to_string(i) + "/2 --threads 1";
+    ASSERT_EQ(run_tool("bounds " + d.string() + " --out " + (b / "bounds.csv").string() + shard).exit_code, 0);
+    ASSERT_EQ(run_tool("probe " + d.string() + " --sample 12 --quiet --out " + pr.string() + shard).exit_code, 0);
+  }
+  const auto damaged = [&](const fs::path& dir, const std::string& shard_file, const std::string& output,
+                           const std::function<void(nlohmann::json&)>& edit, const std::string& why) {
+    const fs::path file = dir / shard_file;
+    const std::string saved = read_file(file);
+    auto j = nlohmann::json::parse(saved);
+    edit(j);
+    write_file_atomic(file, j.dump());
+    const ToolRun r = run_tool("merge " + d.string() + " --out " + dir.string());
+    EXPECT_EQ(r.exit_code, 1) << why << "\n" << r.output;
+    EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / output)) << why;
+    write_file_atomic(file, saved);
+  };
+  const std::string bounds_1 = "bounds_shard-1-of-2.json", probe_1 = "probe_shard-1-of-2.json";
+  const std::string named = (b / bounds_1).string() + " is damaged (";
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["contacts"][0] = -1; },
+          named + "contact -1 is not one of the packing's 81); run shard 1/2's job again or remove it");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["contacts"][0] = 81; }, "contact 81 is not one");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["contacts"][0] = 2; },
+          "contact 2 belongs to shard 0, not 1");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["contacts"][0] = 3; }, "contact 3 is listed twice");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["fn_min"][0] = nullptr; }, "type must be number");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["fn_max"].erase(0); }, "39 maxima");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["fn_min"][1] = -0.5; }, "a negative fn_min");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["iterations"] = 1e300; }, "iterations must be an integer");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["unscaled_solves"] = -2; }, "unscaled_solves is negative");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["busy_seconds"] = -1; }, "busy_seconds is -1, not >= 0");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j.erase("lp_seconds"); }, "lp_seconds");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j = nlohmann::json::array(); }, "is not a shard");
+  damaged(pr, probe_1, "probes.csv", [](nlohmann::json& j) { j["wall_seconds"] = "x"; },
+          (pr / probe_1).string() + " is damaged (");
+  damaged(pr, probe_1, "probes.csv", [](nlohmann::json& j) { j["ranks"] = 5; }, "ranks is not an array");
+  damaged(pr, probe_1, "probes.csv", [](nlohmann::json& j) { j["ranks"][0]["busy_seconds"] = -3; },
+          "busy_seconds is -3, not >= 0");
+  const auto state_0 = nlohmann::json::parse(read_file(pr / "probe_shard-0-of-2.json")).at("state");
+  ASSERT_FALSE(state_0.at("rows").empty());
+  damaged(pr, probe_1, "probes.csv", [&](nlohmann::json& j) { j["state"] = state_0; }, "belongs to shard 0, not 1");
+  write_file_atomic(pr / "probe_shard-2-of-2.json", "{}");
+  const ToolRun beyond = run_tool("merge " + d.string() + " --out " + pr.string());
+  EXPECT_EQ(beyond.exit_code, 1) << beyond.output;
+  EXPECT_NE(beyond.output.find("numbered beyond its 2 shards"), std::string::npos) << beyond.output;
+  fs::remove(pr / "probe_shard-2-of-2.json");
+  // Undamaged, both merge.
+  for (const auto& [dir, output] : {std::pair{b, "bounds.csv"}, std::pair{pr, "probes.csv"}}) {
+    const ToolRun r = run_tool("merge " + d.string() + " --out " + dir.string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(fs::exists(dir / output));
+  }
+}
+
 }  // namespace
 }  // namespace unjam

@@ -26,6 +26,7 @@
 #include "unjam/core/campaign_time.hpp"
 #include "unjam/core/dir_lock.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/json_integer.hpp"
 #include "unjam/core/rank_loads_json.hpp"
 #include "unjam/core/version.hpp"
 #include "unjam/ensemble/force_bounds.hpp"
@@ -291,41 +292,59 @@ void add_bounds_command(CLI::App& app) {
 bool merge_bounds_shards(const std::string& dir, const std::string& out) {
   BoundsOptions opt;
   opt.dir = dir;
-  const std::vector<nlohmann::json> shards = read_shards(out.empty() ? dir : out, "bounds_shard");
+  const std::vector<ShardFile> shards = read_shards(out.empty() ? dir : out, "bounds_shard");
   if (shards.empty()) return false;
-  const nlohmann::json& first = shards.front();
-  opt.gap_tol = first.at("options").at("gap_tol").get<double>();
-  opt.fn_tol = first.at("options").at("fn_tol").get<double>();
-  opt.method = first.at("options").at("method").get<std::string>();
-  opt.out = first.at("options").at("out").get<std::string>();
+  const ShardFile& first = shards.front();
+  read_shard(first, [&] {
+    const nlohmann::json& o = first.json.at("options");
+    opt.gap_tol = o.at("gap_tol").get<double>();
+    opt.fn_tol = o.at("fn_tol").get<double>();
+    opt.method = o.at("method").get<std::string>();
+    opt.out = o.at("out").get<std::string>();
+  });
   const auto t_start = std::chrono::steady_clock::now();
   const Packing packing = read_packing(dir);
   const EquilibriumSystem sys = admissible_system(packing, opt.gap_tol, opt.fn_tol);
   ForceBounds bounds;
   bounds.fn_min = bounds.fn_max = Eigen::VectorXd::Constant(sys.num_contacts(), std::nan(""));
   BoundsRun run;
-  for (const nlohmann::json& j : shards) {
-    if (j.at("options") != first.at("options"))
-      throw Error("the bounds shards in " + dir + " come from runs with other settings");
-    const auto contacts = j.at("contacts").get<std::vector<int>>();
-    for (std::size_t i = 0; i < contacts.size(); ++i) {
-      if (contacts[i] >= sys.num_contacts()) throw Error("bounds shard of another packing in " + dir);
-      bounds.fn_min[contacts[i]] = j.at("fn_min").at(i).get<double>();
-      bounds.fn_max[contacts[i]] = j.at("fn_max").at(i).get<double>();
-    }
-    bounds.min_lps_skipped += j.at("min_lps_skipped").get<int>();
-    bounds.iterations += j.at("iterations").get<long long>();
-    bounds.loosened_solves += j.at("loosened_solves").get<long long>();
-    bounds.simplex_finishes += j.value("simplex_finishes", 0LL);  // 0 in shards written before
-    bounds.unscaled_solves += j.value("unscaled_solves", 0LL);
-    bounds.seconds = std::max(bounds.seconds, j.at("lp_seconds").get<double>());
-    run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
-                         j.at("busy_seconds").get<double>()});
-    // every shard's runs (a shard written before they were recorded: its 2 x contacts LP values untimed)
-    run.all_runs = run.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
-                                                          2 * static_cast<long long>(contacts.size()));
+  std::vector<bool> seen;
+  for (const ShardFile& shard : shards) {
+    const nlohmann::json& j = shard.json;
+    if (j.value("options", nlohmann::json()) != first.json.at("options"))
+      throw Error("the bounds shards in " + shard.file.parent_path().string() + " come from runs with other settings");
+    read_shard(shard, [&] {
+      const std::vector<int> contacts = json_integers<int>(j.at("contacts"), "contacts");
+      claim_shard_contacts(shard, contacts, sys.num_contacts(), seen);
+      const nlohmann::json &fn_min = j.at("fn_min"), &fn_max = j.at("fn_max");
+      if (fn_min.size() != contacts.size() || fn_max.size() != contacts.size())
+        throw Error(std::to_string(contacts.size()) + " contacts, " + std::to_string(fn_min.size()) + " minima and " +
+                    std::to_string(fn_max.size()) + " maxima");
+      for (std::size_t i = 0; i < contacts.size(); ++i) {
+        bounds.fn_min[contacts[i]] = fn_min.at(i).get<double>();
+        bounds.fn_max[contacts[i]] = fn_max.at(i).get<double>();
+        if (!(bounds.fn_min[contacts[i]] >= 0.0)) throw Error("a negative fn_min");
+      }
+      const auto count = [&j](const char* key, bool required) {
+        const long long n = required || j.contains(key) ? json_integer<long long>(j.at(key), key) : 0;
+        if (n < 0) throw Error(std::string(key) + " is negative");
+        return n;
+      };
+      bounds.min_lps_skipped += static_cast<int>(count("min_lps_skipped", true));
+      bounds.iterations += count("iterations", true);
+      bounds.loosened_solves += count("loosened_solves", true);
+      bounds.simplex_finishes += count("simplex_finishes", false);  // 0 in shards written before
+      bounds.unscaled_solves += count("unscaled_solves", false);
+      bounds.seconds = std::max(bounds.seconds, non_negative_number(j, "lp_seconds"));
+      run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
+                           non_negative_number(j, "busy_seconds")});
+      // every shard's runs (a shard written before they were recorded: its 2 x contacts LP values untimed)
+      run.all_runs = run.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
+                                                            2 * static_cast<long long>(contacts.size()));
+    });
   }
-  if (bounds.fn_max.hasNaN()) throw Error("the bounds shards in " + dir + " do not cover every contact");
+  if (bounds.fn_max.hasNaN())
+    throw Error("the bounds shards in " + first.file.parent_path().string() + " do not cover every contact of " + dir);
   const auto t_rank = std::chrono::steady_clock::now();
   const RankInfo rank = equilibrium_rank(sys);
   run.t_rank = seconds_since(t_rank);

@@ -601,36 +601,47 @@ void run(const ProbeOptions& o) {
 bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   const fs::path out = out_dir.empty() ? fs::path(dir) : fs::path(out_dir);
   const Packing p = read_packing(dir);
-  const std::vector<nlohmann::json> shards = read_shards(out, "probe_shard");
+  const std::vector<ShardFile> shards = read_shards(out, "probe_shard");
   if (shards.empty()) return false;
   ProbeOptions o;
   o.dir = dir;
-  const nlohmann::json& first = shards.front();
+  const ShardFile& first = shards.front();
   // The settings the shards' campaign records, read back (campaign_settings_from_json refuses
   // a record it would not have written on p).
-  const CampaignSettings s =
-      campaign_settings_from_json(first.at("settings"), p, "the settings of the shards in " + out.string());
-  o.fit_window = first.at("options").at("fit_window").get<std::vector<double>>();
+  CampaignSettings s;
+  read_shard(first, [&] {
+    s = campaign_settings_from_json(first.json.at("settings"), p, "the settings of the shards in " + out.string());
+    o.fit_window = first.json.at("options").at("fit_window").get<std::vector<double>>();
+  });
   CampaignState state = empty_campaign_state(p);
   RunTime time;
   const std::string fingerprint = packing_fingerprint(p);
-  for (const nlohmann::json& j : shards) {
+  std::vector<bool> seen;
+  for (const ShardFile& shard : shards) {
+    const nlohmann::json& j = shard.json;
     if (j.value("packing", std::string()) != fingerprint)
       throw Error("the shards in " + out.string() + " were probed on another packing than " + dir);
-    if (j.at("settings") != first.at("settings") || j.at("options") != first.at("options"))
+    if (j.value("settings", nlohmann::json()) != first.json.at("settings") ||
+        j.value("options", nlohmann::json()) != first.json.at("options"))
       throw Error("the shards in " + out.string() + " come from runs with other settings");
-    const CampaignState part = campaign_state_from_json(j.at("state"), p);
-    for (const ProbeRow& r : part.rows) state.rows.push_back(r);
-    state.average.merge(part.average);
-    time.wall = std::max(time.wall, j.at("wall_seconds").get<double>());
-    RankLoad load;
-    load.rank = static_cast<int>(time.loads.size());
-    load.tasks = static_cast<long long>(part.rows.size());
-    for (const auto& l : j.at("ranks")) load.busy_seconds += l.at("busy_seconds").get<double>();
-    time.loads.push_back(load);
-    // every shard's runs (a shard written before they were recorded: its probes untimed)
-    time.all_runs = time.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
-                                                            static_cast<long long>(part.rows.size()));
+    read_shard(shard, [&] {
+      const CampaignState part = campaign_state_from_json(j.at("state"), p);
+      std::vector<int> contacts;
+      for (const ProbeRow& r : part.rows) contacts.push_back(r.contact);
+      claim_shard_contacts(shard, contacts, static_cast<int>(p.contacts.size()), seen);
+      for (const ProbeRow& r : part.rows) state.rows.push_back(r);
+      state.average.merge(part.average);
+      time.wall = std::max(time.wall, non_negative_number(j, "wall_seconds"));
+      RankLoad load;
+      load.rank = static_cast<int>(time.loads.size());
+      load.tasks = static_cast<long long>(part.rows.size());
+      if (!j.at("ranks").is_array()) throw Error("ranks is not an array");
+      for (const auto& l : j.at("ranks")) load.busy_seconds += non_negative_number(l, "busy_seconds");
+      time.loads.push_back(load);
+      // every shard's runs (a shard written before they were recorded: its probes untimed)
+      time.all_runs = time.all_runs + campaign_time_from_json(j.value("all_runs", nlohmann::json()),
+                                                              static_cast<long long>(part.rows.size()));
+    });
   }
   std::sort(state.rows.begin(), state.rows.end(),
             [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });

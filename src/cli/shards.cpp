@@ -6,6 +6,7 @@
 #include "cli/run_info.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/error.hpp"
+#include "unjam/core/work_source.hpp"
 
 namespace unjam::cli {
 
@@ -21,8 +22,9 @@ std::unique_ptr<DirLock> lock_output(const fs::path& dir, int shard, int shards)
   return std::make_unique<DirLock>(dir, command_line(), name);
 }
 
-std::vector<nlohmann::json> read_shards(const fs::path& dir, const std::string& prefix) {
-  const std::regex name(prefix + R"(-(\d+)-of-(\d+)\.json)");
+std::vector<ShardFile> read_shards(const fs::path& dir, const std::string& prefix) {
+  // At most 9 digits, so that stoi cannot overflow; other names are not shards.
+  const std::regex name(prefix + R"(-(\d{1,9})-of-(\d{1,9})\.json)");
   std::map<int, fs::path> found;
   int shards = 0;
   if (fs::is_directory(dir))
@@ -37,17 +39,53 @@ std::vector<nlohmann::json> read_shards(const fs::path& dir, const std::string& 
       shards = k;
       found[std::stoi(m[1])] = e.path();
     }
-  std::vector<nlohmann::json> out;
+  std::vector<ShardFile> out;
   for (int i = 0; i < shards; ++i) {
     if (!found.contains(i))
       throw Error(dir.string() + ": shard " + std::to_string(i) + "/" + std::to_string(shards) +
                   " is missing (" + shard_file_name(prefix, i, shards) +
                   "); run that shard's job (again: it resumes)");
-    const auto j = nlohmann::json::parse(read_file(found[i]), nullptr, false);
-    if (j.is_discarded()) throw Error(found[i].string() + " is not valid JSON");
-    out.push_back(j);
+    auto j = nlohmann::json::parse(read_file(found[i]), nullptr, false);
+    if (j.is_discarded() || !j.is_object()) throw Error(found[i].string() + " is not a shard (not a JSON object)");
+    out.push_back({found[i], i, shards, std::move(j)});
   }
+  if (found.size() > static_cast<std::size_t>(shards))
+    throw Error(dir.string() + " holds " + prefix + " files numbered beyond its " + std::to_string(shards) +
+                " shards; remove those of the other run");
   return out;
+}
+
+void read_shard(const ShardFile& s, const std::function<void()>& read) {
+  const auto damaged = [&s](const std::string& what) {
+    return Error(s.file.string() + " is damaged (" + what + "); run shard " + std::to_string(s.shard) + "/" +
+                 std::to_string(s.shards) + "'s job again or remove it");
+  };
+  try {
+    read();
+  } catch (const nlohmann::json::exception& e) {
+    throw damaged(e.what());
+  } catch (const Error& e) {
+    throw damaged(e.what());
+  }
+}
+
+double non_negative_number(const nlohmann::json& j, const std::string& key) {
+  const double x = j.at(key).get<double>();  // JSON holds no NaN or infinity
+  if (!(x >= 0.0)) throw Error(key + " is " + j.at(key).dump() + ", not >= 0");
+  return x;
+}
+
+void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, int count, std::vector<bool>& seen) {
+  seen.resize(static_cast<std::size_t>(count), false);
+  for (const int k : contacts) {
+    if (k < 0 || k >= count)
+      throw Error("contact " + std::to_string(k) + " is not one of the packing's " + std::to_string(count));
+    if (!in_shard(k, s.shard, s.shards))
+      throw Error("contact " + std::to_string(k) + " belongs to shard " + std::to_string(k % s.shards) + ", not " +
+                  std::to_string(s.shard));
+    if (seen[static_cast<std::size_t>(k)]) throw Error("contact " + std::to_string(k) + " is listed twice");
+    seen[static_cast<std::size_t>(k)] = true;
+  }
 }
 
 }  // namespace unjam::cli

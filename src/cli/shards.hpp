@@ -3,6 +3,7 @@
 // writes OUT/<prefix>-i-of-K.json, and `unjam merge` joins the K of them into the outputs
 // one run would write (README, "On a cluster").
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,9 +21,30 @@ std::string shard_file_name(const std::string& prefix, int shard, int shards);
 // shards > 1 the shard's own (the shards of a job array write side by side).
 std::unique_ptr<DirLock> lock_output(const std::filesystem::path& dir, int shard, int shards);
 
+// One shard file: its name, its place i of K in the job array, and its JSON.
+struct ShardFile {
+  std::filesystem::path file;
+  int shard = 0;
+  int shards = 1;
+  nlohmann::json json;
+};
+
 // The K shard files of `prefix` in `dir`, parsed, in shard order; empty if there is none.
-// Throws unjam::Error if shards are missing or of different K.
-std::vector<nlohmann::json> read_shards(const std::filesystem::path& dir, const std::string& prefix);
+// Throws unjam::Error if shards are missing or of different K, or one is not JSON.
+std::vector<ShardFile> read_shards(const std::filesystem::path& dir, const std::string& prefix);
+
+// Runs `read` on shard `s`; a key it lacks, a value of the wrong type (nlohmann's exceptions)
+// or an unjam::Error of `read` becomes
+//   unjam::Error("<file> is damaged (<what>); run shard i/K's job again or remove it").
+void read_shard(const ShardFile& s, const std::function<void()>& read);
+
+// The JSON number j[key] if it is >= 0 (a time, in s); throws unjam::Error otherwise.
+double non_negative_number(const nlohmann::json& j, const std::string& key);
+
+// Checks that the contacts `contacts` of shard `s` are in it (contact k belongs to shard
+// k mod K, core/work_source's in_shard), below `count`, and not in `seen` (the contacts of the
+// shards read before it), and adds them to `seen`; throws unjam::Error otherwise.
+void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, int count, std::vector<bool>& seen);
 
 // The merges, from the commands that write the shards (cmd_probe.cpp, cmd_bounds.cpp);
 // each does nothing without shards and returns whether it merged.
