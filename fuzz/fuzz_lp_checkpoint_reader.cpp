@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -90,21 +91,17 @@ std::vector<std::string> saved_checkpoints() {
   // Threshold: a bracket after the two ends and after a few bisections.
   const fs::path tf = dir / "seed_threshold.json";
   fs::remove(tf);
-  unjam::ThresholdProgress t;
-  t.so_far.mu_low = 0.0;
-  t.so_far.mu_high = kMu;
-  t.so_far.lps = 2;
-  t.so_far.iterations = 40;
-  t.so_far.seconds = 0.01;
-  t.runs = 1;
-  unjam::ThresholdCheckpoint(tf, threshold_settings()).save(t);
-  out.push_back(unjam::read_file(tf));
-  t.so_far.mu_low = 0.0875;
-  t.so_far.mu_high = 0.09375;
-  t.so_far.lps = 6;
-  t.runs = 3;
-  unjam::ThresholdCheckpoint(tf, threshold_settings()).save(t);
-  out.push_back(unjam::read_file(tf));
+  for (const auto& [mu_low, mu_high, lps, runs] : {std::tuple{0.0, kMu, 2, 1}, std::tuple{0.0875, 0.09375, 6, 3}}) {
+    unjam::ThresholdProgress t;
+    t.so_far.mu_low = mu_low;
+    t.so_far.mu_high = mu_high;
+    t.so_far.lps = lps;
+    t.so_far.iterations = 40;
+    t.so_far.seconds = 0.01;
+    t.runs = runs;
+    unjam::ThresholdCheckpoint(tf, threshold_settings()).save(t);
+    out.push_back(unjam::read_file(tf));
+  }
   fs::remove_all(dir);
   return out;
 }

@@ -591,6 +591,21 @@ TEST(FrictionThreshold, ZeroWhereNoFrictionIsNeededAndAnErrorWithoutANetwork) {
   }
 }
 
+// Opening the checkpoint `file` of type Checkpoint for a run of `settings` is refused with an
+// unjam::Error naming the file and saying `why`, and the file is left as it was.
+template <typename Checkpoint>
+void expect_checkpoint_refused(const fs::path& file, const nlohmann::json& settings, const std::string& why) {
+  const std::string before = unjam::read_file(file);
+  try {
+    Checkpoint c(file, settings);
+    ADD_FAILURE() << "accepted; expected: " << why;
+  } catch (const unjam::Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(unjam::read_file(file), before);
+}
+
 // A run stopped every 40 LPs (alternately on 1 and 2 threads) and resumed from its checkpoint
 // until it is complete gives the bits of one uninterrupted run, solves no LP twice and records
 // the time of every run.
@@ -651,15 +666,7 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   partial.fn_max[3] = 2.5;
   partial.iterations = 17;
   const auto refused = [&](const nlohmann::json& now, const std::string& why) {
-    const std::string before = unjam::read_file(file);
-    try {
-      unjam::BoundsCheckpoint c(file, now);
-      ADD_FAILURE() << "accepted; expected: " << why;
-    } catch (const unjam::Error& e) {
-      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
-    }
-    EXPECT_EQ(unjam::read_file(file), before);
+    expect_checkpoint_refused<unjam::BoundsCheckpoint>(file, now, why);
   };
   unjam::BoundsCheckpoint(file, settings).save(partial, {});
   {
@@ -761,16 +768,8 @@ TEST(ThresholdCheckpoint, ReadsBackWhatItSavedAndRefusesDamagedFiles) {
     unjam::ThresholdCheckpoint(file, settings).save(saved);
     auto j = nlohmann::json::parse(unjam::read_file(file));
     edit(j);
-    const std::string before = j.dump();
-    unjam::write_file_atomic(file, before);
-    try {
-      unjam::ThresholdCheckpoint c(file, settings);
-      ADD_FAILURE() << "accepted; expected: " << why;
-    } catch (const unjam::Error& e) {
-      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
-    }
-    EXPECT_EQ(unjam::read_file(file), before);
+    unjam::write_file_atomic(file, j.dump());
+    expect_checkpoint_refused<unjam::ThresholdCheckpoint>(file, settings, why);
   };
   refused_after([](nlohmann::json& j) { j["mu_high"] = 0.2; }, "its bracket is not");
   refused_after([](nlohmann::json& j) { j["mu_low"] = 0.075; }, "its bracket is not");
