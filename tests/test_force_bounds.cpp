@@ -762,6 +762,36 @@ TEST(ThresholdCheckpoint, ReadsBackWhatItSavedAndRefusesDamagedFiles) {
     EXPECT_EQ(t.iterations, 321);
     EXPECT_EQ(t.seconds, 0.25);
     EXPECT_EQ(c.resumed()->runs, 2);
+    // Attached to a run: it starts from the bracket read, unless the run has its own.
+    unjam::FrictionThresholdOptions own;
+    own.mu_low = 0.01;
+    EXPECT_THROW(c.attach(own), unjam::Error);
+    unjam::FrictionThresholdOptions o;
+    int called = 0;
+    o.progress = [&called](int, const unjam::FrictionThreshold&) { ++called; };
+    c.attach(o);
+    EXPECT_EQ(o.mu_low, 0.05);
+    EXPECT_EQ(o.mu_high, 0.075);
+    EXPECT_TRUE(o.bracket_checked);
+    // Its hook saves the run's bracket with every run's counts, then calls the run's own hook.
+    unjam::FrictionThreshold now;
+    now.mu = 0.1;
+    now.mu_low = 0.0625;
+    now.mu_high = 0.075;
+    now.lps = 1;
+    now.iterations = 9;
+    now.seconds = 0.5;
+    o.progress(7, now);
+    EXPECT_EQ(called, 1);
+    const unjam::FrictionThreshold all = c.with_earlier(now);
+    EXPECT_EQ(all.lps, 5);
+    EXPECT_EQ(all.iterations, 330);
+    EXPECT_EQ(all.seconds, 0.75);
+    const unjam::ThresholdCheckpoint again(file, settings);
+    ASSERT_TRUE(again.resumed().has_value());
+    EXPECT_EQ(again.resumed()->so_far.mu_low, 0.0625);
+    EXPECT_EQ(again.resumed()->so_far.lps, 5);
+    EXPECT_EQ(again.resumed()->runs, 3);
   }
   const auto refused_after = [&](const std::function<void(nlohmann::json&)>& edit, const std::string& why) {
     fs::remove(file);

@@ -213,6 +213,37 @@ def test_friction_threshold_equals_tool(tmp_path, p50):
         unjam.friction_threshold(p50, between=(0.049, 0.1))
 
 
+def test_friction_threshold_resumes_the_tools_checkpoint(tmp_path, p50):
+    """checkpoint= resumes the bracket a stopped `unjam threshold` kept, to the bracket and the
+    LP count of one uninterrupted run, and removes the file; a checkpoint of other settings, or
+    one beside between=, is refused and kept; a checkpoint file that is not there is only
+    written while the run goes on."""
+    whole = unjam.friction_threshold(p50)
+    assert whole["runs"] == 1 and whole["resumed_from"] is None
+    out = tmp_path / "t.json"
+    stopped = subprocess.run([str(UNJAM), "threshold", str(FIXTURE), "--quiet", "--stop-after", "5",
+                              "--out", str(out)], capture_output=True, text=True)
+    assert stopped.returncode == 3, stopped.stderr
+    checkpoint = tmp_path / "t_checkpoint.json"
+    saved = checkpoint.read_text()
+    kept = json.loads(saved)
+    with pytest.raises(unjam.Error, match="rel_tol: 0.001 there, 0.002 here"):
+        unjam.friction_threshold(p50, rel_tol=2e-3, checkpoint=checkpoint)
+    with pytest.raises(unjam.Error, match="holds the bracket of a stopped run"):
+        unjam.friction_threshold(p50, between=(0.025, 0.05), checkpoint=checkpoint)
+    assert checkpoint.read_text() == saved
+    t = unjam.friction_threshold(p50, checkpoint=checkpoint)
+    assert not checkpoint.exists()
+    assert (t["mu_s_low"], t["mu_s_high"]) == (whole["mu_s_low"], whole["mu_s_high"])
+    assert t["lps"] == whole["lps"] and t["runs"] == 2
+    assert t["resumed_from"] == (kept["mu_low"], kept["mu_high"])
+    fresh = tmp_path / "fresh_checkpoint.json"
+    u = unjam.friction_threshold(p50, checkpoint=fresh)
+    assert not fresh.exists()
+    assert (u["mu_s_low"], u["mu_s_high"], u["lps"], u["runs"]) == (
+        whole["mu_s_low"], whole["mu_s_high"], whole["lps"], 1)
+
+
 def test_bounds_report_their_progress_and_a_callbacks_exception_stops_them(tmp_path, p50):
     """progress= gets a dict at the first LP, every 2 s and at the end (done = total = 2 N_c);
     an exception it raises stops the LPs as Ctrl-C does: raised, the checkpoint saved, and

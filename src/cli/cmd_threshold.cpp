@@ -83,9 +83,9 @@ nlohmann::ordered_json threshold_json(const ThresholdOptions& opt, const Packing
 }
 
 // The bisection with a progress line per LP (stderr), stopped by Ctrl-C, SIGTERM or --stop-after
-// between two LPs: then Interrupted (exit code 3) with the bracket reached. Once both ends of the
-// bracket are checked, it is saved in the checkpoint after every LP, and a run of the same
-// settings resumes from it (its LPs, iterations and time added to the result's).
+// between two LPs: then Interrupted (exit code 3) with the bracket reached. The checkpoint
+// resumes it and keeps its bracket once both ends are checked (ThresholdCheckpoint::attach);
+// the result holds every run's LPs, iterations and time.
 FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& sys, FrictionThresholdOptions& o,
                          const ThresholdCheckpoint& checkpoint) {
   o.rel_tol = opt.rel_tol;
@@ -93,51 +93,35 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
   if (resumed && !opt.between.empty())
     throw Error(checkpoint.file().string() + " holds the bracket of a stopped run; run without --between to "
                 "continue it, or remove it to start from --between");
-  if (resumed) {
-    o.mu_low = resumed->so_far.mu_low;
-    o.mu_high = resumed->so_far.mu_high;
-    o.bracket_checked = true;
+  if (resumed)
     std::fprintf(stderr, "threshold: resuming from %s (%s: %d LPs in %d run%s)\n",
-                 bracket_text(o.mu_low, o.mu_high).c_str(), checkpoint.file().string().c_str(),
-                 resumed->so_far.lps, resumed->runs, resumed->runs == 1 ? "" : "s");
-  } else if (!opt.between.empty()) {
+                 bracket_text(resumed->so_far.mu_low, resumed->so_far.mu_high).c_str(),
+                 checkpoint.file().string().c_str(), resumed->so_far.lps, resumed->runs,
+                 resumed->runs == 1 ? "" : "s");
+  else if (!opt.between.empty()) {
     o.mu_low = opt.between[0];
     o.mu_high = opt.between[1];
   }
-  const ThresholdProgress before = resumed.value_or(ThresholdProgress{});
-  // This run's result with the earlier runs' LPs, iterations and LP time added.
-  const auto with_earlier = [&before](FrictionThreshold r) {
-    r.lps += before.so_far.lps;
-    r.iterations += before.so_far.iterations;
-    r.seconds += before.so_far.seconds;
-    return r;
-  };
-  double lo = std::isnan(o.mu_low) ? 0.0 : o.mu_low, hi = std::isnan(o.mu_high) ? sys.mu : o.mu_high;
-  bool saved = false;
+  double lo = resumed ? resumed->so_far.mu_low : std::isnan(o.mu_low) ? 0.0 : o.mu_low;
+  double hi = resumed ? resumed->so_far.mu_high : std::isnan(o.mu_high) ? sys.mu : o.mu_high;
   int lps = 0;
   const auto t_lp = std::chrono::steady_clock::now();
   o.progress = [&](int total, const FrictionThreshold& so_far) {
-    const int done = so_far.lps;
-    const double l = so_far.mu_low, h = so_far.mu_high;
-    lo = l;
-    hi = h;
-    lps = done;
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_lp).count();
-    if ((resumed || done >= 2) && h > l) {  // both ends checked
-      checkpoint.save({with_earlier(so_far), before.runs + 1});
-      saved = true;
-    }
+    lo = so_far.mu_low;
+    hi = so_far.mu_high;
+    lps = so_far.lps;
     if (opt.quiet) return;
-    std::fprintf(stderr, "threshold: %d / %d LPs, %s, %s elapsed, ETA %s\n", done, total,
-                 bracket_text(l, h).c_str(), format_duration(t).c_str(),
-                 format_duration(t * (total - done) / done).c_str());
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_lp).count();
+    std::fprintf(stderr, "threshold: %d / %d LPs, %s, %s elapsed, ETA %s\n", lps, total, bracket_text(lo, hi).c_str(),
+                 format_duration(t).c_str(), format_duration(t * (total - lps) / lps).c_str());
   };
+  checkpoint.attach(o);
   o.should_stop = [&] { return InterruptGuard::requested() || (opt.stop_after > 0 && lps >= opt.stop_after); };
   try {
     const InterruptGuard interrupts;
-    return with_earlier(friction_threshold(sys, o));
+    return checkpoint.with_earlier(friction_threshold(sys, o));
   } catch (const Cancelled&) {
-    if (saved)
+    if (std::filesystem::exists(checkpoint.file()))  // read at the start, or saved by this run
       throw Interrupted("stopped with " + bracket_text(lo, hi) + "; run the same command again to continue from it (" +
                         checkpoint.file().string() + ")");
     char buf[64];

@@ -20,6 +20,7 @@
 #include "python/bindings.hpp"
 #include "unjam/analysis/packing_stats.hpp"
 #include "unjam/campaign/bounds_checkpoint.hpp"
+#include "unjam/campaign/threshold_checkpoint.hpp"
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/dir_lock.hpp"
@@ -349,9 +350,14 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
 }
 
 // unjam.friction_threshold: as `unjam threshold` (ensemble/friction_threshold). between: (LO, HI),
-// a bracket to start from. Ctrl-C stops it between two LPs (KeyboardInterrupt).
+// a bracket to start from. Ctrl-C stops it between two LPs (KeyboardInterrupt). With
+// `checkpoint` (a file path): resumes from the bracket saved there (a checkpoint of another
+// packing or other settings is refused, as is one beside `between`), saves the bracket after
+// every LP once both ends are checked, and removes the file at the end
+// (campaign/threshold_checkpoint; the file of `unjam threshold`).
 py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol, double fn_tol,
-                               std::optional<std::pair<double, double>> between) {
+                               std::optional<std::pair<double, double>> between,
+                               const std::optional<std::filesystem::path>& checkpoint) {
   FrictionThresholdOptions o;
   o.rel_tol = rel_tol;
   if (between) std::tie(o.mu_low, o.mu_high) = *between;
@@ -359,11 +365,20 @@ py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol,
   o.should_stop = [&poll] { return poll(); };
   FrictionThreshold t;
   int contacts = 0;
+  std::optional<ThresholdCheckpoint> saved;
   try {
     py::gil_scoped_release release;
     const EquilibriumSystem sys = admissible_system(p, gap_tol, fn_tol);
     contacts = sys.num_contacts();
+    if (checkpoint) {
+      saved.emplace(*checkpoint, threshold_checkpoint_settings(p, gap_tol, fn_tol, contacts, sys.mu, rel_tol));
+      saved->attach(o);
+    }
     t = friction_threshold(sys, o);
+    if (saved) {
+      t = saved->with_earlier(t);
+      saved->remove();
+    }
   } catch (const Error&) {
     poll.rethrow_if_interrupted();
     throw;
@@ -376,6 +391,9 @@ py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol,
   d["lps"] = t.lps;
   d["simplex_iterations"] = t.iterations;
   d["seconds"] = t.seconds;
+  const std::optional<ThresholdProgress> resumed = saved ? saved->resumed() : std::nullopt;
+  d["runs"] = resumed ? resumed->runs + 1 : 1;
+  d["resumed_from"] = resumed ? py::object(py::make_tuple(resumed->so_far.mu_low, resumed->so_far.mu_high)) : py::none();
   return d;
 }
 
@@ -539,12 +557,16 @@ void bind_compute(py::module_& m) {
         "eta_s: at this run's pace) every 2 s and at the end; an exception it raises "
         "stops the LPs as Ctrl-C does (the checkpoint saved) and is raised");
   m.def("friction_threshold", &friction_threshold_of, py::arg("packing"), py::kw_only(), py::arg("rel_tol") = 1e-3,
-        py::arg("gap_tol") = 1e-9, py::arg("fn_tol") = 1e-9, py::arg("between") = py::none(),
+        py::arg("gap_tol") = 1e-9, py::arg("fn_tol") = 1e-9, py::arg("between") = py::none(), py::arg("checkpoint") = py::none(),
         "The friction threshold, as `unjam threshold`: a dict with mu (the packing's), mu_s_low and mu_s_high "
         "(the smallest friction coefficient at which the contacts admit a force network lies in "
-        "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps, simplex_iterations and seconds. "
+        "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps, simplex_iterations and "
+        "seconds (of every run), runs and resumed_from (the checkpoint's bracket, or None). "
         "Bisection on the LP's feasibility until the bracket is narrower than rel_tol x mu; between=(LO, HI) "
-        "starts from a bracket (no network at LO, one at HI; both checked). Ctrl-C stops it between LPs");
+        "starts from a bracket (no network at LO, one at HI; both checked). Ctrl-C stops it between LPs. "
+        "checkpoint: a file to resume from (if it is there; `unjam threshold`'s friction_threshold_checkpoint.json "
+        "is one) and to keep the bracket in after every LP once both ends are checked; removed at the end. "
+        "A checkpoint of another packing or other settings, or one beside between, is refused");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
         "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
   m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),

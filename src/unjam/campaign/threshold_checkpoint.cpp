@@ -1,5 +1,6 @@
 #include "unjam/campaign/threshold_checkpoint.hpp"
 
+#include <cmath>
 #include <utility>
 
 #include "unjam/core/atomic_file.hpp"
@@ -47,6 +48,33 @@ ThresholdCheckpoint::ThresholdCheckpoint(std::filesystem::path file, nlohmann::j
   if (!(t.mu_low >= 0.0 && t.mu_high > t.mu_low && t.mu_high <= t.mu))
     throw Error(name + " is damaged (its bracket is not 0 <= mu_low < mu_high <= mu); remove it to start over");
   resumed_ = p;
+}
+
+void ThresholdCheckpoint::attach(FrictionThresholdOptions& o) const {
+  if (resumed_) {
+    if (!std::isnan(o.mu_low) || !std::isnan(o.mu_high))
+      throw Error(file_.string() + " holds the bracket of a stopped run; start without a bracket to continue it, "
+                  "or remove it to start from yours");
+    o.mu_low = resumed_->so_far.mu_low;
+    o.mu_high = resumed_->so_far.mu_high;
+    o.bracket_checked = true;
+  }
+  const int runs = (resumed_ ? resumed_->runs : 0) + 1;
+  o.progress = [this, runs, resumed = resumed_.has_value(), then = std::move(o.progress)](
+                   int total, const FrictionThreshold& so_far) {
+    if ((resumed || so_far.lps >= 2) && so_far.mu_high > so_far.mu_low)  // both ends checked
+      save({with_earlier(so_far), runs});
+    if (then) then(total, so_far);
+  };
+}
+
+FrictionThreshold ThresholdCheckpoint::with_earlier(FrictionThreshold r) const {
+  if (resumed_) {
+    r.lps += resumed_->so_far.lps;
+    r.iterations += resumed_->so_far.iterations;
+    r.seconds += resumed_->so_far.seconds;
+  }
+  return r;
 }
 
 void ThresholdCheckpoint::save(const ThresholdProgress& p) const {

@@ -40,6 +40,16 @@ class ThresholdCheckpoint {
   const std::filesystem::path& file() const { return file_; }
   // The progress read from the file, if there was one.
   const std::optional<ThresholdProgress>& resumed() const { return resumed_; }
+  // Hooks a run of the bisection to the checkpoint (`unjam threshold`, unjam.friction_threshold):
+  // with a bracket read, the run starts from it without solving its ends again
+  // (o.bracket_checked); once both ends are checked (after the run's second LP, or from the
+  // start when resumed) the bracket and the counts of every run so far are saved after every
+  // LP, before the progress hook o had (still called). Throws unjam::Error where a bracket was
+  // read and o already starts from one (o.mu_low or o.mu_high set): the file is kept.
+  void attach(FrictionThresholdOptions& o) const;
+  // A run's result r with the LPs, iterations and LP seconds of the runs read from the file
+  // added: the counts of every run that made the bracket.
+  FrictionThreshold with_earlier(FrictionThreshold r) const;
   // Writes the file (atomically).
   void save(const ThresholdProgress& p) const;
   // Removes the file, if there is one.
