@@ -244,6 +244,32 @@ def test_friction_threshold_resumes_the_tools_checkpoint(tmp_path, p50):
         whole["mu_s_low"], whole["mu_s_high"], whole["lps"], 1)
 
 
+def test_friction_threshold_reports_its_progress_and_a_callbacks_exception_stops_it(tmp_path, p50):
+    """progress= gets a dict after every LP with the bracket so far, narrowing to the result's;
+    an exception it raises stops the bisection as Ctrl-C does: raised, the bracket kept in the
+    checkpoint, from which the next call ends on the bracket of one uninterrupted run."""
+    seen = []
+    whole = unjam.friction_threshold(p50, progress=seen.append)
+    assert [d["done"] for d in seen] == list(range(1, whole["lps"] + 1))
+    assert seen[-1]["done"] == seen[-1]["total"] and seen[-1]["eta_s"] == 0.0
+    assert (seen[-1]["mu_s_low"], seen[-1]["mu_s_high"]) == (whole["mu_s_low"], whole["mu_s_high"])
+    widths = [d["mu_s_high"] - d["mu_s_low"] for d in seen]
+    assert all(b <= a for a, b in zip(widths, widths[1:]))
+    assert all(d["elapsed_s"] >= 0.0 and d["eta_s"] >= 0.0 for d in seen)
+
+    def stop(d):
+        if d["done"] == 4:
+            raise RuntimeError("stop at 4")
+
+    checkpoint = tmp_path / "checkpoint.json"
+    with pytest.raises(RuntimeError, match="stop at 4"):
+        unjam.friction_threshold(p50, checkpoint=checkpoint, progress=stop)
+    assert json.loads(checkpoint.read_text())["lps"] == 4
+    t = unjam.friction_threshold(p50, checkpoint=checkpoint)
+    assert (t["mu_s_low"], t["mu_s_high"], t["lps"], t["runs"]) == (
+        whole["mu_s_low"], whole["mu_s_high"], whole["lps"], 2)
+
+
 def test_bounds_report_their_progress_and_a_callbacks_exception_stops_them(tmp_path, p50):
     """progress= gets a dict at the first LP, every 2 s and at the end (done = total = 2 N_c);
     an exception it raises stops the LPs as Ctrl-C does: raised, the checkpoint saved, and

@@ -355,14 +355,33 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
 // packing or other settings is refused, as is one beside `between`), saves the bracket after
 // every LP once both ends are checked, and removes the file at the end
 // (campaign/threshold_checkpoint; the file of `unjam threshold`).
+// progress: given a dict (done, total: this run's LPs; mu_s_low, mu_s_high: the bracket so far;
+// elapsed_s, eta_s) after every LP, as the tool's progress lines; its first exception stops the
+// bisection as Ctrl-C does (the checkpoint kept) and is raised.
 py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol, double fn_tol,
                                std::optional<std::pair<double, double>> between,
-                               const std::optional<std::filesystem::path>& checkpoint) {
+                               const std::optional<std::filesystem::path>& checkpoint,
+                               std::optional<py::function> progress) {
   FrictionThresholdOptions o;
   o.rel_tol = rel_tol;
   if (between) std::tie(o.mu_low, o.mu_high) = *between;
   SignalPoll poll;
-  o.should_stop = [&poll] { return poll(); };
+  Callback report(std::move(progress));
+  o.should_stop = [&] { return report.failed() || poll(); };
+  if (report)
+    o.progress = [&report, t_start = std::chrono::steady_clock::now()](int total, const FrictionThreshold& so_far) {
+      const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      report([&] {
+        py::dict d;
+        d["done"] = so_far.lps;
+        d["total"] = total;
+        d["mu_s_low"] = so_far.mu_low;
+        d["mu_s_high"] = so_far.mu_high;
+        d["elapsed_s"] = t;
+        d["eta_s"] = so_far.lps > 0 ? t * (total - so_far.lps) / so_far.lps : 0.0;
+        return d;
+      });
+    };
   FrictionThreshold t;
   int contacts = 0;
   std::optional<ThresholdCheckpoint> saved;
@@ -380,9 +399,11 @@ py::dict friction_threshold_of(const Packing& p, double rel_tol, double gap_tol,
       saved->remove();
     }
   } catch (const Error&) {
+    report.rethrow_if_failed();
     poll.rethrow_if_interrupted();
     throw;
   }
+  report.rethrow_if_failed();
   py::dict d;
   d["mu"] = t.mu;
   d["mu_s_low"] = t.mu_low;
@@ -558,6 +579,7 @@ void bind_compute(py::module_& m) {
         "stops the LPs as Ctrl-C does (the checkpoint saved) and is raised");
   m.def("friction_threshold", &friction_threshold_of, py::arg("packing"), py::kw_only(), py::arg("rel_tol") = 1e-3,
         py::arg("gap_tol") = 1e-9, py::arg("fn_tol") = 1e-9, py::arg("between") = py::none(), py::arg("checkpoint") = py::none(),
+        py::arg("progress") = py::none(),
         "The friction threshold, as `unjam threshold`: a dict with mu (the packing's), mu_s_low and mu_s_high "
         "(the smallest friction coefficient at which the contacts admit a force network lies in "
         "(mu_s_low, mu_s_high]; both 0 where one exists without friction), contacts, lps, simplex_iterations and "
@@ -566,7 +588,10 @@ void bind_compute(py::module_& m) {
         "starts from a bracket (no network at LO, one at HI; both checked). Ctrl-C stops it between LPs. "
         "checkpoint: a file to resume from (if it is there; `unjam threshold`'s friction_threshold_checkpoint.json "
         "is one) and to keep the bracket in after every LP once both ends are checked; removed at the end. "
-        "A checkpoint of another packing or other settings, or one beside between, is refused");
+        "A checkpoint of another packing or other settings, or one beside between, is refused. "
+        "progress: a callable given a dict (done, total: this run's LPs; mu_s_low, mu_s_high: the bracket so far; "
+        "elapsed_s, eta_s) after every LP; an exception it raises stops the bisection as Ctrl-C does (the "
+        "checkpoint kept) and is raised");
   m.def("stats", &stats, py::arg("packing"), py::kw_only(), py::arg("threshold") = 1e-9,
         "phi, z, rattlers, residuals, ...: the object `unjam info --json` prints");
   m.def("export", &export_packing, py::arg("packing"), py::arg("path"), py::kw_only(),
