@@ -44,8 +44,9 @@ class ThresholdCheckpoint {
   // with a bracket read, the run starts from it without solving its ends again
   // (o.bracket_checked); once both ends are checked (after the run's second LP, or from the
   // start when resumed) the bracket and the counts of every run so far are saved after every
-  // LP, before the progress hook o had (still called). Throws unjam::Error where a bracket was
-  // read and o already starts from one (o.mu_low or o.mu_high set): the file is kept.
+  // LP, before the progress hook o had (still called); the hook points into this object, which
+  // must outlive the run. Throws unjam::Error where a bracket was read and o already starts
+  // from one (o.mu_low or o.mu_high set): the file is kept.
   void attach(FrictionThresholdOptions& o) const;
   // A run's result r with the LPs, iterations and LP seconds of the runs read from the file
   // added: the counts of every run that made the bracket.
