@@ -699,8 +699,8 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   for (const auto& [key, value, why] :
        {std::tuple{"iterations", nlohmann::json(1e300), "iterations must be an integer"},
         std::tuple{"min_lps_skipped", nlohmann::json(2.5), "min_lps_skipped must be an integer"},
-        std::tuple{"unscaled_solves", nlohmann::json(-1), "its counts are not"},
-        std::tuple{"min_lps_skipped", nlohmann::json(Nc + 1), "its counts are not"}}) {
+        std::tuple{"unscaled_solves", nlohmann::json(-1), "unscaled_solves is negative"},
+        std::tuple{"min_lps_skipped", nlohmann::json(Nc + 1), "min_lps_skipped is more than its 81 contacts"}}) {
     fs::remove(file);
     unjam::BoundsCheckpoint(file, settings).save(partial, {});
     edited([&](nlohmann::json& j) { j[key] = value; });

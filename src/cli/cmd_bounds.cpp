@@ -195,14 +195,12 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
     fn_min.push_back(b.fn_min[k]);
     fn_max.push_back(b.fn_max[k]);
   }
-  const nlohmann::json j = {
+  nlohmann::json j = {
       {"options", {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}}},
-      {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max},
-      {"min_lps_skipped", b.min_lps_skipped}, {"iterations", b.iterations},
-      {"loosened_solves", b.loosened_solves}, {"simplex_finishes", b.simplex_finishes},
-      {"unscaled_solves", b.unscaled_solves}, {"lp_seconds", b.seconds},
+      {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max}, {"lp_seconds", b.seconds},
       {"busy_seconds", run.loads.at(0).busy_seconds}, {"all_runs", to_json(run.all_runs)},
       {"command", command_line()}};
+  put_bounds_counts(j, b);
   const std::filesystem::path file = output_dir(opt) / shard_file_name("bounds_shard", shard, shards);
   write_file_atomic(file, j.dump());
   std::printf("shard %d/%d: %zu contacts -> %s (merge the shards with `unjam merge`)\n", shard,
@@ -325,16 +323,13 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
         bounds.fn_max[contacts[i]] = fn_max.at(i).get<double>();
         if (!(bounds.fn_min[contacts[i]] >= 0.0)) throw Error("a negative fn_min");
       }
-      const auto count = [&j](const char* key, bool required) {
-        const long long n = required || j.contains(key) ? json_integer<long long>(j.at(key), key) : 0;
-        if (n < 0) throw Error(std::string(key) + " is negative");
-        return n;
-      };
-      bounds.min_lps_skipped += static_cast<int>(count("min_lps_skipped", true));
-      bounds.iterations += count("iterations", true);
-      bounds.loosened_solves += count("loosened_solves", true);
-      bounds.simplex_finishes += count("simplex_finishes", false);  // 0 in shards written before
-      bounds.unscaled_solves += count("unscaled_solves", false);
+      ForceBounds counts;
+      get_bounds_counts(j, counts);
+      bounds.min_lps_skipped += counts.min_lps_skipped;
+      bounds.iterations += counts.iterations;
+      bounds.loosened_solves += counts.loosened_solves;
+      bounds.simplex_finishes += counts.simplex_finishes;
+      bounds.unscaled_solves += counts.unscaled_solves;
       bounds.seconds = std::max(bounds.seconds, non_negative_number(j, "lp_seconds"));
       run.loads.push_back({static_cast<int>(run.loads.size()), 0, static_cast<long long>(contacts.size()),
                            non_negative_number(j, "busy_seconds")});

@@ -102,8 +102,7 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
     o.mu_low = opt.between[0];
     o.mu_high = opt.between[1];
   }
-  double lo = resumed ? resumed->so_far.mu_low : std::isnan(o.mu_low) ? 0.0 : o.mu_low;
-  double hi = resumed ? resumed->so_far.mu_high : std::isnan(o.mu_high) ? sys.mu : o.mu_high;
+  double lo = 0.0, hi = 0.0;  // the bracket reached, for the message of a stopped run
   int lps = 0;
   const auto t_lp = std::chrono::steady_clock::now();
   o.progress = [&](int total, const FrictionThreshold& so_far) {
@@ -115,7 +114,9 @@ FrictionThreshold bisect(const ThresholdOptions& opt, const EquilibriumSystem& s
     std::fprintf(stderr, "threshold: %d / %d LPs, %s, %s elapsed, ETA %s\n", lps, total, bracket_text(lo, hi).c_str(),
                  format_duration(t).c_str(), format_duration(t * (total - lps) / lps).c_str());
   };
-  checkpoint.attach(o);
+  checkpoint.attach(o);  // the bracket read, if any, is now o's
+  lo = std::isnan(o.mu_low) ? 0.0 : o.mu_low;
+  hi = std::isnan(o.mu_high) ? sys.mu : o.mu_high;
   o.should_stop = [&] { return InterruptGuard::requested() || (opt.stop_after > 0 && lps >= opt.stop_after); };
   try {
     const InterruptGuard interrupts;

@@ -46,6 +46,28 @@ long long known_values(const ForceBounds& b) {
                                 (b.fn_max.array() == b.fn_max.array()).count());
 }
 
+void put_bounds_counts(nlohmann::json& j, const ForceBounds& b) {
+  j["min_lps_skipped"] = b.min_lps_skipped;
+  j["iterations"] = b.iterations;
+  j["loosened_solves"] = b.loosened_solves;
+  j["simplex_finishes"] = b.simplex_finishes;
+  j["unscaled_solves"] = b.unscaled_solves;
+}
+
+void get_bounds_counts(const nlohmann::json& j, ForceBounds& b) {
+  const auto count = [&j](const char* key, bool required) {
+    const long long n = required || j.contains(key) ? json_integer<long long>(j.at(key), key) : 0;
+    if (n < 0) throw Error(std::string(key) + " is negative");
+    return n;
+  };
+  b.min_lps_skipped = json_integer<int>(j.at("min_lps_skipped"), "min_lps_skipped");
+  if (b.min_lps_skipped < 0) throw Error("min_lps_skipped is negative");
+  b.iterations = count("iterations", true);
+  b.loosened_solves = count("loosened_solves", true);
+  b.simplex_finishes = count("simplex_finishes", false);
+  b.unscaled_solves = count("unscaled_solves", false);
+}
+
 BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
     : file_(std::move(file)), settings_(std::move(settings)) {
   require_writable(file_);  // before any LP, not at the first save
@@ -57,15 +79,7 @@ BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json se
   try {
     b->fn_min = values_of(j.at("fn_min"));
     b->fn_max = values_of(j.at("fn_max"));
-    b->min_lps_skipped = json_integer<int>(j.at("min_lps_skipped"), "min_lps_skipped");
-    b->iterations = json_integer<long long>(j.at("iterations"), "iterations");
-    b->loosened_solves = json_integer<long long>(j.at("loosened_solves"), "loosened_solves");
-    // Checkpoints written before these counts were kept: 0.
-    const auto count_or_zero = [&j](const char* key) {
-      return j.contains(key) ? json_integer<long long>(j.at(key), key) : 0LL;
-    };
-    b->simplex_finishes = count_or_zero("simplex_finishes");
-    b->unscaled_solves = count_or_zero("unscaled_solves");
+    get_bounds_counts(j, *b);
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
@@ -73,10 +87,9 @@ BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json se
   if (b->fn_min.size() != contacts || b->fn_max.size() != contacts)
     throw Error(name + " is damaged (" + std::to_string(b->fn_max.size()) + " values for " +
                 std::to_string(contacts) + " contacts); remove it to start over");
-  if (b->min_lps_skipped < 0 || b->min_lps_skipped > contacts || b->iterations < 0 || b->loosened_solves < 0 ||
-      b->simplex_finishes < 0 || b->unscaled_solves < 0)
-    throw Error(name + " is damaged (its counts are not 0 <= min_lps_skipped <= contacts and >= 0 otherwise); " +
-                "remove it to start over");
+  if (b->min_lps_skipped > contacts)
+    throw Error(name + " is damaged (min_lps_skipped is more than its " + std::to_string(contacts) +
+                " contacts); remove it to start over");
   // A minimum known is 0 (opened) or positive (ensemble/force_bounds); NaN: not known yet.
   if ((b->fn_min.array() < 0.0).any())
     throw Error(name + " is damaged (a negative fn_min); remove it to start over");
@@ -104,16 +117,12 @@ void BoundsCheckpoint::attach(ForceBoundsOptions& lp, double every_s, int stop_a
 }
 
 void BoundsCheckpoint::save(const ForceBounds& b, const CampaignTime& runs) const {
-  write_file_atomic(file_, nlohmann::json{{"settings", settings_},
-                                          {"fn_min", values_json(b.fn_min)},
-                                          {"fn_max", values_json(b.fn_max)},
-                                          {"min_lps_skipped", b.min_lps_skipped},
-                                          {"iterations", b.iterations},
-                                          {"loosened_solves", b.loosened_solves},
-                                          {"simplex_finishes", b.simplex_finishes},
-                                          {"unscaled_solves", b.unscaled_solves},
-                                          {"runs", to_json(runs)}}
-                               .dump());
+  nlohmann::json j = {{"settings", settings_},
+                      {"fn_min", values_json(b.fn_min)},
+                      {"fn_max", values_json(b.fn_max)},
+                      {"runs", to_json(runs)}};
+  put_bounds_counts(j, b);
+  write_file_atomic(file_, j.dump());
 }
 
 void BoundsCheckpoint::remove() const {

@@ -31,6 +31,15 @@ nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const
 // The values known in a partial result: the finite entries of fn_min and fn_max.
 long long known_values(const ForceBounds& b);
 
+// The counts of ForceBounds (min_lps_skipped, iterations, loosened_solves, simplex_finishes,
+// unscaled_solves), written into the object j under those names: as the checkpoint and the
+// shards of `unjam bounds --shard` store them.
+void put_bounds_counts(nlohmann::json& j, const ForceBounds& b);
+// The counts read back from j into b: integers >= 0 (json_integer), simplex_finishes and
+// unscaled_solves 0 where absent (files written before they were kept). Throws unjam::Error
+// naming the count, or nlohmann's exception for a count missing.
+void get_bounds_counts(const nlohmann::json& j, ForceBounds& b);
+
 // A checkpoint file and the run it belongs to. Constructing it checks that the file can be
 // written (unjam::Error if not, before any LP is solved) and reads the file if there is one:
 // a checkpoint of other settings is refused (unjam::Error naming the settings that differ,

@@ -59,11 +59,9 @@ void ThresholdCheckpoint::attach(FrictionThresholdOptions& o) const {
     o.mu_high = resumed_->so_far.mu_high;
     o.bracket_checked = true;
   }
-  const int runs = (resumed_ ? resumed_->runs : 0) + 1;
-  o.progress = [this, runs, resumed = resumed_.has_value(), then = std::move(o.progress)](
-                   int total, const FrictionThreshold& so_far) {
-    if ((resumed || so_far.lps >= 2) && so_far.mu_high > so_far.mu_low)  // both ends checked
-      save({with_earlier(so_far), runs});
+  o.progress = [this, then = std::move(o.progress)](int total, const FrictionThreshold& so_far) {
+    if ((resumed_ || so_far.lps >= 2) && so_far.mu_high > so_far.mu_low)  // both ends checked
+      save({with_earlier(so_far), (resumed_ ? resumed_->runs : 0) + 1});
     if (then) then(total, so_far);
   };
 }
