@@ -460,7 +460,7 @@ TEST_F(CliReliability, ProbeAllWithNothingToProbeIsAnError) {
 // (exit code 1), and writes nothing: a contact out of range (written out of bounds before), one
 // of another shard or listed twice, values missing or of the wrong type, counts that are not
 // non-negative integers, negative times, a file that is not an object, files numbered beyond
-// the job array. The shards as written merge.
+// the job array, probe shards that leave a target out. The shards as written merge.
 TEST_F(CliReliability, MergeRefusesDamagedShardsByNameAndWritesNothing) {
   const fs::path d = copy("p50-mu0.1", "d");
   const fs::path b = root_ / "bounds", pr = root_ / "probe";
@@ -506,6 +506,14 @@ TEST_F(CliReliability, MergeRefusesDamagedShardsByNameAndWritesNothing) {
   const auto state_0 = nlohmann::json::parse(read_file(pr / "probe_shard-0-of-2.json")).at("state");
   ASSERT_FALSE(state_0.at("rows").empty());
   damaged(pr, probe_1, "probes.csv", [&](nlohmann::json& j) { j["state"] = state_0; }, "belongs to shard 0, not 1");
+  // shard 1 stopped after one probe: a consistent state, short of the shard's share
+  const fs::path stopped = root_ / "stopped";
+  ASSERT_EQ(run_tool("probe " + d.string() + " --sample 12 --quiet --threads 1 --shard 1/2 --stop-after 1 --out " +
+                     stopped.string()).exit_code, 3);
+  const auto one_probe = nlohmann::json::parse(read_file(stopped / "probe_checkpoint-shard-1-of-2.json")).at("state");
+  ASSERT_EQ(one_probe.at("rows").size(), 1u);
+  damaged(pr, probe_1, "probes.csv", [&](nlohmann::json& j) { j["state"] = one_probe; },
+          "do not cover every probed contact");
   write_file_atomic(pr / "probe_shard-2-of-2.json", "{}");
   const ToolRun beyond = run_tool("merge " + d.string() + " --out " + pr.string());
   EXPECT_EQ(beyond.exit_code, 1) << beyond.output;

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -256,6 +257,12 @@ TEST_F(Distributed, ShardsMergedGiveTheBytesOfOneProcess) {
   const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   expect_same_probe_outputs(one, out);
+  // The shards hold the targets in turn by place: their rows differ in number by at most 1.
+  std::vector<std::size_t> rows;
+  for (int i = 0; i < 3; ++i)
+    rows.push_back(nlohmann::json::parse(read_file(out / ("probe_shard-" + std::to_string(i) + "-of-3.json")))
+                       .at("state").at("rows").size());
+  EXPECT_LE(*std::max_element(rows.begin(), rows.end()) - *std::min_element(rows.begin(), rows.end()), 1u);
 
   // The summary's all_runs: the shards' runs summed; a shard file without them (written
   // before they were recorded) has its probes untimed.
@@ -299,6 +306,10 @@ TEST_F(Distributed, ShardsMergedKeepTheLargestInertiaOfTheirRuns) {
   const auto shard = nlohmann::json::parse(read_file(out / "probe_shard-0-of-2.json"));
   EXPECT_EQ(shard.at("settings").at("max_inertia_F0").get<double>(), 1.5e-5);
   EXPECT_FALSE(shard.at("options").contains("max_inertia"));
+  // The shards hold the sample in turn by place, 3 each (by contact number, k mod 2, all 6 of
+  // this sample fell in shard 0).
+  EXPECT_EQ(shard.at("state").at("rows").size(), 3u);
+  EXPECT_EQ(nlohmann::json::parse(read_file(out / "probe_shard-1-of-2.json")).at("state").at("rows").size(), 3u);
   const CommandResult merged = shell(unjam(0, "merge '" + kP50.string() + "' --out '" + out.string() + "'"));
   ASSERT_EQ(merged.exit_code, 0) << merged.output;
   expect_same_probe_outputs(one, out);
@@ -307,6 +318,22 @@ TEST_F(Distributed, ShardsMergedKeepTheLargestInertiaOfTheirRuns) {
   EXPECT_EQ(a.at("inertial"), b.at("inertial"));
   EXPECT_GT(a.at("inertial").get<int>(), 0);
   EXPECT_LT(a.at("inertial").get<int>(), 6);
+}
+
+TEST_F(Distributed, AShardRefusesACheckpointHoldingAnotherShardsProbes) {
+  // What a shard's checkpoint from an unjam that split the targets by contact number looks like
+  // to this one: probes of another shard. Resuming it would probe some contacts twice and leave
+  // others out, so it is refused with the way out, and kept.
+  const fs::path out = probe("split", 0, "--shard 1/2 --stop-after 1", 3);
+  const fs::path other = out / "probe_checkpoint-shard-0-of-2.json";
+  fs::rename(out / "probe_checkpoint-shard-1-of-2.json", other);
+  const std::string saved = read_file(other);
+  const CommandResult r = shell(unjam(0, "probe '" + kP50.string() + "' --all --method lp --threads 1 --quiet --out '" +
+                                         out.string() + "' --shard 0/2"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("which is not in shard 0/2"), std::string::npos) << r.output;
+  EXPECT_EQ(read_file(other), saved);
+  EXPECT_FALSE(fs::exists(out / "probe_shard-0-of-2.json"));
 }
 
 TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {

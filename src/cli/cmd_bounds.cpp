@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <string>
 
@@ -306,6 +307,9 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
   ForceBounds bounds;
   bounds.fn_min = bounds.fn_max = Eigen::VectorXd::Constant(sys.num_contacts(), std::nan(""));
   BoundsRun run;
+  std::vector<int> every(static_cast<std::size_t>(sys.num_contacts()));
+  std::iota(every.begin(), every.end(), 0);  // the LPs' tasks: every contact, in order
+  const std::string whole = "the packing's " + std::to_string(sys.num_contacts());
   std::vector<bool> seen;
   for (const ShardFile& shard : shards) {
     const nlohmann::json& j = shard.json;
@@ -313,7 +317,7 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
       throw Error("the bounds shards in " + shard.file.parent_path().string() + " come from runs with other settings");
     read_shard(shard, [&] {
       const std::vector<int> contacts = json_integers<int>(j.at("contacts"), "contacts");
-      claim_shard_contacts(shard, contacts, sys.num_contacts(), seen);
+      claim_shard_contacts(shard, contacts, every, whole, seen);
       const nlohmann::json &fn_min = j.at("fn_min"), &fn_max = j.at("fn_max");
       if (fn_min.size() != contacts.size() || fn_max.size() != contacts.size())
         throw Error(std::to_string(contacts.size()) + " contacts, " + std::to_string(fn_min.size()) + " minima and " +

@@ -346,6 +346,18 @@ CampaignState start_state(const fs::path& checkpoint, const Packing& p, const nl
   return std::move(*saved.state);
 }
 
+// A shard's checkpoint holds only the shard's own contacts (`mine`, sorted). One that holds
+// others was written by a version that split the targets by contact number (k mod K) instead of
+// by their place in the list: finishing it would probe some contacts twice and leave others out.
+void refuse_other_shards_probes(const CampaignState& state, const std::vector<int>& mine, const fs::path& checkpoint,
+                                const std::string& shard) {
+  for (const ProbeRow& r : state.rows)
+    if (!std::binary_search(mine.begin(), mine.end(), r.contact))
+      throw Error(checkpoint.string() + " holds contact " + std::to_string(r.contact) + ", which is not in shard " +
+                  shard + " (it was written by an unjam that split the targets by contact number); finish the job array "
+                  "with that unjam, or remove its probe_checkpoint-shard-* and probe_shard-* files to start again");
+}
+
 // Progress and ETA on stderr, at most every 2 s and at the end (none with --quiet).
 std::function<void(int, int, double, double)> progress_printer(const ProbeOptions& o) {
   if (o.quiet) return {};
@@ -394,8 +406,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   run.settings = to_json(s);
   run.fingerprint = packing_fingerprint(p);
   if (!o.partial.empty()) {
-    const auto planned = std::count_if(targets.begin(), targets.end(),
-                                       [&, shard = shard, shards = shards](int k) { return in_shard(k, shard, shards); });
+    const auto planned = shard_targets(targets, shard, shards).size();
     return write_partial(o, p, run.checkpoint, s, static_cast<int>(planned), out);
   }
   const std::unique_ptr<WorkDistributor> dist = make_distributor(shard, shards);
@@ -408,6 +419,7 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   run.running = running_printer(o, rank_prefix(*dist));
   run.running_every_s = o.running_every;
   CampaignState state = start_state(run.checkpoint, p, run.settings, run.earlier);
+  if (shards > 1) refuse_other_shards_probes(state, shard_targets(targets, shard, shards), run.checkpoint, o.shard);
   const std::string spread = dist->ranks() > 1 ? " x " + std::to_string(dist->ranks()) + " MPI ranks"
                              : shards > 1       ? ", shard " + o.shard : "";
   char window[96] = "";
@@ -616,6 +628,8 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
   CampaignState state = empty_campaign_state(p);
   RunTime time;
   const std::string fingerprint = packing_fingerprint(p);
+  const std::vector<int> targets = campaign_targets(p, s);
+  const std::string whole = "the campaign's " + std::to_string(targets.size()) + " probed contacts";
   std::vector<bool> seen;
   for (const ShardFile& shard : shards) {
     const nlohmann::json& j = shard.json;
@@ -628,7 +642,7 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
       const CampaignState part = campaign_state_from_json(j.at("state"), p);
       std::vector<int> contacts;
       for (const ProbeRow& r : part.rows) contacts.push_back(r.contact);
-      claim_shard_contacts(shard, contacts, static_cast<int>(p.contacts.size()), seen);
+      claim_shard_contacts(shard, contacts, targets, whole, seen);
       for (const ProbeRow& r : part.rows) state.rows.push_back(r);
       state.average.merge(part.average);
       time.wall = std::max(time.wall, non_negative_number(j, "wall_seconds"));
@@ -643,6 +657,11 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
                                                               static_cast<long long>(part.rows.size()));
     });
   }
+  const auto missing = std::find(seen.begin(), seen.end(), false);
+  if (missing != seen.end())
+    throw Error("the probe shards in " + out.string() + " do not cover every probed contact of " + dir +
+                " (contact " + std::to_string(targets[static_cast<std::size_t>(missing - seen.begin())]) +
+                " is in none)");
   std::sort(state.rows.begin(), state.rows.end(),
             [](const ProbeRow& x, const ProbeRow& y) { return x.contact < y.contact; });
   finish_campaign(o, p, s, state, time, out);
@@ -784,7 +803,8 @@ void add_probe_command(CLI::App& app) {
       ->capture_default_str()->check(non_negative_number());
   cmd->add_flag("--quiet", o->quiet, "no progress lines");
   cmd->add_option("--shard", o->shard,
-                  "i/K: probe only the contacts k with k mod K = i (one job of a job array; "
+                  "i/K: probe only every K-th target from the i-th (the targets at places p with p mod K = i in the "
+                  "sorted list of contacts to probe, so a sample too is shared evenly; one job of a job array; "
                   "`unjam merge` joins the K shards into the outputs of one run)");
   cmd->add_option("--stop-after", o->stop_after,
                   "stop after this many new probes, saving the checkpoint (as Ctrl-C; rerun to resume)")

@@ -1,5 +1,6 @@
 #include "cli/shards.hpp"
 
+#include <algorithm>
 #include <map>
 #include <regex>
 
@@ -75,16 +76,18 @@ double non_negative_number(const nlohmann::json& j, const std::string& key) {
   return x;
 }
 
-void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, int count, std::vector<bool>& seen) {
-  seen.resize(static_cast<std::size_t>(count), false);
+void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, const std::vector<int>& tasks,
+                          const std::string& whole, std::vector<bool>& seen) {
+  seen.resize(tasks.size(), false);
   for (const int k : contacts) {
-    if (k < 0 || k >= count)
-      throw Error("contact " + std::to_string(k) + " is not one of the packing's " + std::to_string(count));
-    if (!in_shard(k, s.shard, s.shards))
-      throw Error("contact " + std::to_string(k) + " belongs to shard " + std::to_string(k % s.shards) + ", not " +
-                  std::to_string(s.shard));
-    if (seen[static_cast<std::size_t>(k)]) throw Error("contact " + std::to_string(k) + " is listed twice");
-    seen[static_cast<std::size_t>(k)] = true;
+    const auto at = std::lower_bound(tasks.begin(), tasks.end(), k);
+    if (at == tasks.end() || *at != k) throw Error("contact " + std::to_string(k) + " is not one of " + whole);
+    const int place = static_cast<int>(at - tasks.begin());
+    if (!in_shard(place, s.shard, s.shards))
+      throw Error("contact " + std::to_string(k) + " belongs to shard " + std::to_string(place % s.shards) +
+                  ", not " + std::to_string(s.shard));
+    if (seen[static_cast<std::size_t>(place)]) throw Error("contact " + std::to_string(k) + " is listed twice");
+    seen[static_cast<std::size_t>(place)] = true;
   }
 }
 

@@ -41,10 +41,14 @@ void read_shard(const ShardFile& s, const std::function<void()>& read);
 // The JSON number j[key] if it is >= 0 (a time, in s); throws unjam::Error otherwise.
 double non_negative_number(const nlohmann::json& j, const std::string& key);
 
-// Checks that the contacts `contacts` of shard `s` are in it (contact k belongs to shard
-// k mod K, core/work_source's in_shard), below `count`, and not in `seen` (the contacts of the
-// shards read before it), and adds them to `seen`; throws unjam::Error otherwise.
-void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, int count, std::vector<bool>& seen);
+// Checks that the contacts `contacts` of shard `s` are tasks of its campaign (`tasks`, sorted:
+// every contact 0 to N_c - 1 of the force bounds, the targets of a probe campaign; `whole` names
+// them in the error, e.g. "the packing's 81"), that they are in the shard (the task at place p
+// belongs to shard p mod K, core/work_source's in_shard) and not in `seen` (by place: the
+// contacts of the shards read before it), and adds them to `seen`; throws unjam::Error
+// otherwise.
+void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, const std::vector<int>& tasks,
+                          const std::string& whole, std::vector<bool>& seen);
 
 // The merges, from the commands that write the shards (cmd_probe.cpp, cmd_bounds.cpp);
 // each does nothing without shards and returns whether it merged.

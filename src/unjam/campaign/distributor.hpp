@@ -4,8 +4,9 @@
 //     ranks of the job. Rank 0 hands out tasks on request from a server thread (a work
 //     queue: one small message per request, dynamic load balance) and computes too; every
 //     result travels to rank 0, which gathers it, writes checkpoints and the outputs.
-//   - otherwise one process, or with --shard i/K the tasks t with t mod K == i of a
-//     scheduler job array (outputs merged afterwards by `unjam merge`).
+//   - otherwise one process, or with --shard i/K the tasks at places p with p mod K == i of
+//     the loop's whole list (core/work_source's in_shard), one job of a scheduler job array
+//     (outputs merged afterwards by `unjam merge`).
 // See docs/ARCHITECTURE.md ("Campaigns") and README ("On a cluster").
 #include <memory>
 #include <string>

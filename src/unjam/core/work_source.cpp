@@ -57,7 +57,7 @@ LocalDistributor::LocalDistributor(int shard, int shards) : shard_(shard), shard
 bool LocalDistributor::run(const std::vector<int>& tasks, const WorkLoop& loop) {
   std::vector<int> mine;
   for (const int t : tasks)
-    if (in_shard(t, shard_, shards_)) mine.push_back(t);
+    if (in_shard(loop.place ? loop.place(t) : t, shard_, shards_)) mine.push_back(t);
   TaskQueue queue(mine, loop);
   std::mutex mutex;
   QueueSource source(queue, loop, load_, mutex);

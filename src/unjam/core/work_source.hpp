@@ -63,6 +63,10 @@ struct WorkLoop {
   std::function<bool(int task)> skip;
   // Polled before tasks are handed out; once true, no more are (on any process). May be empty.
   std::function<bool()> should_stop;
+  // The task's place in the whole list of the loop's tasks, the same in every run of it
+  // (a probe campaign's: the contact's place among its targets); it decides the task's shard
+  // (in_shard). Empty: the task itself (a list of every contact, 0 to N_c - 1).
+  std::function<int(int task)> place;
 };
 
 // Tasks and compute time of one process over the loops run so far.
@@ -132,13 +136,14 @@ class QueueSource : public WorkSource {
   std::mutex& mutex_;
 };
 
-// Whether task t belongs to shard `shard` of `shards` (`--shard i/K`): t mod K == i. The task
-// is the campaign's own number (a probe campaign's: the contact), so the split is stable when
-// a shard resumes.
-inline bool in_shard(int task, int shard, int shards) { return task % shards == shard; }
+// Whether the task at `place` in its loop's whole list (WorkLoop::place) belongs to shard
+// `shard` of `shards` (`--shard i/K`): place mod K == i. So the K shards hold the list in turn,
+// evenly (a sample of contacts too, whatever their numbers), and the split is the same when a
+// shard resumes.
+inline bool in_shard(int place, int shard, int shards) { return place % shards == shard; }
 
-// One process; with shards > 1 it keeps only the tasks in its shard (in_shard: the split of a
-// scheduler job array, `--shard i/K`).
+// One process; with shards > 1 it keeps only the tasks in its shard (in_shard of the task's
+// place: the split of a scheduler job array, `--shard i/K`).
 class LocalDistributor : public WorkDistributor {
  public:
   explicit LocalDistributor(int shard = 0, int shards = 1);

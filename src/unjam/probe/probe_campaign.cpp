@@ -294,6 +294,13 @@ std::vector<int> campaign_targets(const Packing& p, const CampaignSettings& s) {
   return targets;
 }
 
+std::vector<int> shard_targets(const std::vector<int>& targets, int shard, int shards) {
+  std::vector<int> mine;
+  for (std::size_t place = 0; place < targets.size(); ++place)
+    if (in_shard(static_cast<int>(place), shard, shards)) mine.push_back(targets[place]);
+  return mine;
+}
+
 ProbeResult probe_contact(const Packing& p, const CampaignSettings& s, int contact) {
   Worker w;
   return w.probe(p, s, contact);
@@ -363,6 +370,8 @@ bool run_campaign(const Packing& p, const CampaignSettings& settings, CampaignSt
   const std::vector<char> loaded = p.loaded_grains(s.force_threshold * p.force_unit());
   WorkLoop loop;
   loop.should_stop = either(hooks.should_stop, s.nlgs.cancel);
+  // a target's place among all (sorted): what decides its shard
+  loop.place = [&all](int k) { return static_cast<int>(std::lower_bound(all.begin(), all.end(), k) - all.begin()); };
   loop.work = [&](WorkSource& source) { probe_tasks(source, p, s, nullptr, hooks.running, hooks.running_every_s); };
   loop.gather = [&](std::vector<TaskResult>& results) {
     for (const TaskResult& tr : results) {

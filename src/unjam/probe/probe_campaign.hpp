@@ -173,6 +173,11 @@ bool enters_averages(const ProbeRow& row, double max_inertia, double f0);
 // The contacts a campaign probes: force-carrying ones, or a seeded subset of them.
 std::vector<int> campaign_targets(const Packing& packing, const CampaignSettings& settings);
 
+// The contacts of shard `shard` of `shards` (`--shard i/K`) among `targets` (campaign_targets):
+// those at places p with p mod K == i (core/work_source's in_shard), so the K shards probe
+// the targets evenly, a sample as well as all. Sorted, as `targets` is.
+std::vector<int> shard_targets(const std::vector<int>& targets, int shard, int shards);
+
 // Probes every target not yet in `state`; returns false if should_stop or cancel ended it
 // early (a cancelled probe leaves no row in `state`).
 bool run_campaign(const Packing& packing, const CampaignSettings& settings, CampaignState& state,
