@@ -8,8 +8,10 @@
 // back unchanged. An input that is a JSON object without "settings" is also read as an edit of
 // the saved checkpoints (its keys replace theirs). A crash, a sanitizer report, a timeout or
 // another exception fails.
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -51,9 +53,22 @@ const nlohmann::json& threshold_settings() {
 
 // The checkpoints' files: on tmpfs where there is one (the readers' writability check and the
 // saves flush to disk), in a directory of this process made for each input and removed after it.
+// A run that found a failure ends without removing its directory; the directories of runs no
+// longer alive are removed when the next run starts.
 const fs::path& work_dir() {
-  static const fs::path dir = (fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path()) /
-                              ("unjam_fuzz_lp_checkpoint_" + std::to_string(::getpid()));
+  static const fs::path dir = [] {
+    const fs::path root = fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
+    const std::string prefix = "unjam_fuzz_lp_checkpoint_";
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(root, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind(prefix, 0) != 0) continue;
+      const std::string digits = name.substr(prefix.size());
+      if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+      if (::kill(static_cast<pid_t>(std::stol(digits)), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
+    }
+    return root / (prefix + std::to_string(::getpid()));
+  }();
   return dir;
 }
 
