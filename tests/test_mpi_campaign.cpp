@@ -23,6 +23,7 @@
 
 #include "cli_run.hpp"
 #include "unjam/core/atomic_file.hpp"
+#include "unjam/packing/csv_table.hpp"
 
 namespace unjam {
 namespace {
@@ -334,6 +335,69 @@ TEST_F(Distributed, AShardRefusesACheckpointHoldingAnotherShardsProbes) {
   EXPECT_NE(r.output.find("which is not in shard 0/2"), std::string::npos) << r.output;
   EXPECT_EQ(read_file(other), saved);
   EXPECT_FALSE(fs::exists(out / "probe_shard-0-of-2.json"));
+}
+
+TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
+  // A job array of 3: shard 0 finished, shard 1 stopped after 2 probes, shard 2 not started.
+  // `merge --status` reads their files: each shard's share (every third target by place), the
+  // probes done, the state of each job; it writes nothing. A damaged checkpoint is named as
+  // unreadable, the others still reported; a whole campaign's checkpoint is read too.
+  const fs::path one = probe("one", 0);
+  const CsvTable whole = CsvTable::read(one / "probes.csv");
+  const int total = static_cast<int>(whole.rows());
+  ASSERT_GE(total, 9);
+  const auto share = [&](int i) { return (total - i + 2) / 3; };
+  const fs::path out = probe("status", 0, "--shard 0/3");
+  probe("status", 0, "--shard 1/3 --stop-after 2", 3);
+  const auto listing = [&] {
+    std::string names;
+    for (const auto& e : fs::directory_iterator(out)) names += e.path().filename().string() + " " + read_file(e.path());
+    return names;
+  };
+  const std::string before = listing();
+  const std::string status = "merge '" + kP50.string() + "' --status --out '" + out.string() + "'";
+  CommandResult r = shell(unjam(0, status));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const std::string& line :
+       {"probe campaign of " + kP50.string() + " in " + out.string() + ": " + std::to_string(total) +
+            " probes (method lp), 3 shards",
+        "shard 0/3: finished, " + std::to_string(share(0)) + " of " + std::to_string(share(0)) + " probes, 1 run",
+        "shard 1/3: 2 of " + std::to_string(share(1)) + " probes, 1 run",
+        "shard 2/3: not started (" + std::to_string(share(2)) + " probes)",
+        "done " + std::to_string(share(0) + 2) + " of " + std::to_string(total) + " probes",
+        std::string("1 shard finished, 1 started, 1 not started"),
+        "the " + std::to_string(total - share(0) - 2) + " left: ~"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  EXPECT_EQ(r.output.find("every shard has finished"), std::string::npos) << r.output;
+  EXPECT_EQ(listing(), before);
+
+  const fs::path checkpoint_1 = out / "probe_checkpoint-shard-1-of-3.json";
+  const std::string saved = read_file(checkpoint_1);
+  write_file_atomic(checkpoint_1, "{");
+  r = shell(unjam(0, status));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("shard 1/3: unreadable (probe_checkpoint-shard-1-of-3.json is not valid JSON"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("shard 0/3: finished"), std::string::npos) << r.output;
+  write_file_atomic(checkpoint_1, saved);
+
+  probe("status", 0, "--shard 1/3");
+  probe("status", 0, "--shard 2/3");
+  r = shell(unjam(0, status));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("done " + std::to_string(total) + " of " + std::to_string(total)), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("every shard has finished"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(" left: "), std::string::npos) << r.output;
+
+  const fs::path stopped = probe("whole", 0, "--stop-after 3", 3);
+  r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + stopped.string() + "'"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("campaign: 3 of " + std::to_string(total) + " probes, 1 run"), std::string::npos)
+      << r.output;
+  fs::create_directories(root_ / "empty");
+  r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + (root_ / "empty").string() + "'"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no probe campaign in"), std::string::npos) << r.output;
 }
 
 TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {

@@ -1,6 +1,7 @@
 // `unjam merge DIR`: joins the shards of a scheduler job array (`unjam probe ... --shard i/K`,
 // `unjam bounds ... --shard i/K`, one job each) into the files one run would have written,
-// byte for byte (the rows are sorted by contact, the averages are fixed-point sums).
+// byte for byte (the rows are sorted by contact, the averages are fixed-point sums); with
+// --status it prints how far a probe campaign or job array has got (campaign_status.cpp).
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -14,13 +15,23 @@ namespace unjam::cli {
 void add_merge_command(CLI::App& app) {
   struct Options {
     std::string dir, out;
+    bool status = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "merge", "join the outputs of `probe --shard i/K` and `bounds --shard i/K` jobs into those of one run");
   cmd->add_option("dir", o->dir, "packing directory")->required();
   cmd->add_option("--out", o->out, "directory of the shard files and the outputs (default: the packing directory)");
+  cmd->add_flag("--status", o->status,
+                "print how far the probe campaign in the output directory has got (each shard of a job array, or "
+                "the whole campaign's checkpoint; the busy time left at its pace) and change nothing");
   cmd->callback([o] {
+    if (o->status) {
+      if (!print_probe_status(o->dir, o->out))
+        throw Error("no probe campaign in " + (o->out.empty() ? o->dir : o->out) +
+                    " (neither probe_checkpoint.json nor probe_shard-i-of-K.json / probe_checkpoint-shard-i-of-K.json)");
+      return;
+    }
     const auto lock = lock_output(o->out.empty() ? o->dir : o->out, 0, 1);  // the merged outputs' writer
     const bool probes = merge_probe_shards(o->dir, o->out);
     const bool bounds = merge_bounds_shards(o->dir, o->out);

@@ -50,6 +50,14 @@ double non_negative_number(const nlohmann::json& j, const std::string& key);
 void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, const std::vector<int>& tasks,
                           const std::string& whole, std::vector<bool>& seen);
 
+// `unjam merge --status` (campaign_status.cpp): prints how far the probe campaign whose files
+// are in `out` (default: `dir`) has got, from those files alone: each shard of a job array
+// (finished, n of m probes so far with its checkpoint's age, not started, unreadable) or the
+// whole campaign's checkpoint, the probes done, the busy time and the busy time left at that
+// pace. Reads with the settings the files record; changes nothing. Returns false if there is
+// neither a probe checkpoint nor a probe shard file.
+bool print_probe_status(const std::string& dir, const std::string& out);
+
 // The merges, from the commands that write the shards (cmd_probe.cpp, cmd_bounds.cpp);
 // each does nothing without shards and returns whether it merged.
 bool merge_probe_shards(const std::string& dir, const std::string& out);
