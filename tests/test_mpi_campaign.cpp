@@ -341,7 +341,8 @@ TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
   // A job array of 3: shard 0 finished, shard 1 stopped after 2 probes, shard 2 not started.
   // `merge --status` reads their files: each shard's share (every third target by place), the
   // probes done, the state of each job; it writes nothing. A damaged checkpoint is named as
-  // unreadable, the others still reported; a whole campaign's checkpoint is read too.
+  // unreadable, the others still reported; a whole campaign's checkpoint is read too, and a
+  // finished one is said to be.
   const fs::path one = probe("one", 0);
   const CsvTable whole = CsvTable::read(one / "probes.csv");
   const int total = static_cast<int>(whole.rows());
@@ -394,6 +395,9 @@ TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("campaign: 3 of " + std::to_string(total) + " probes, 1 run"), std::string::npos)
       << r.output;
+  r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + one.string() + "'"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("has finished: its outputs are there"), std::string::npos) << r.output;
   fs::create_directories(root_ / "empty");
   r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + (root_ / "empty").string() + "'"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
