@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <map>
 #include <optional>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -84,22 +83,15 @@ JobStatus job_status(const JobFiles& f, const Packing& p, const nlohmann::json& 
 // The jobs whose files are in `out`: K shards (K from the names), or the whole campaign
 // (K = 1: its checkpoint). Throws unjam::Error for shards of two different K.
 std::vector<JobFiles> find_jobs(const fs::path& out) {
-  const std::regex name(R"(probe_(shard|checkpoint-shard)-(\d{1,9})-of-(\d{1,9})\.json)");
-  std::map<int, JobFiles> found;
   int shards = 0;
-  if (fs::is_directory(out))
-    for (const fs::directory_entry& e : fs::directory_iterator(out)) {
-      std::smatch m;
-      const std::string file = e.path().filename().string();
-      if (!std::regex_match(file, m, name)) continue;
-      const int i = std::stoi(m[2]), k = std::stoi(m[3]);
-      if (shards != 0 && k != shards)
-        throw Error(out.string() + " holds probe shard files of " + std::to_string(shards) + " and of " +
-                    std::to_string(k) + " shards; remove those of the other run");
-      if (i >= k) continue;  // not a shard of this job array (merge refuses it by name)
-      shards = k;
-      (m[1] == "shard" ? found[i].finished : found[i].checkpoint) = e.path();
-    }
+  const std::map<int, fs::path> finished = find_shard_files(out, "probe_shard", shards);
+  const std::map<int, fs::path> started = find_shard_files(out, "probe_checkpoint-shard", shards);
+  std::map<int, JobFiles> found;
+  // files numbered beyond the job array are not shards of it (merge refuses them by name)
+  for (const auto& [i, file] : finished)
+    if (i < shards) found[i].finished = file;
+  for (const auto& [i, file] : started)
+    if (i < shards) found[i].checkpoint = file;
   std::vector<JobFiles> jobs;
   if (shards > 0) {
     for (int i = 0; i < shards; ++i) jobs.push_back(found[i]);

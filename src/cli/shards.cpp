@@ -23,11 +23,10 @@ std::unique_ptr<DirLock> lock_output(const fs::path& dir, int shard, int shards)
   return std::make_unique<DirLock>(dir, command_line(), name);
 }
 
-std::vector<ShardFile> read_shards(const fs::path& dir, const std::string& prefix) {
+std::map<int, fs::path> find_shard_files(const fs::path& dir, const std::string& prefix, int& shards) {
   // At most 9 digits, so that stoi cannot overflow; other names are not shards.
   const std::regex name(prefix + R"(-(\d{1,9})-of-(\d{1,9})\.json)");
   std::map<int, fs::path> found;
-  int shards = 0;
   if (fs::is_directory(dir))
     for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
       std::smatch m;
@@ -40,6 +39,12 @@ std::vector<ShardFile> read_shards(const fs::path& dir, const std::string& prefi
       shards = k;
       found[std::stoi(m[1])] = e.path();
     }
+  return found;
+}
+
+std::vector<ShardFile> read_shards(const fs::path& dir, const std::string& prefix) {
+  int shards = 0;
+  std::map<int, fs::path> found = find_shard_files(dir, prefix, shards);
   std::vector<ShardFile> out;
   for (int i = 0; i < shards; ++i) {
     if (!found.contains(i))

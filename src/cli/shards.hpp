@@ -4,6 +4,7 @@
 // one run would write (README, "On a cluster").
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,12 @@ struct ShardFile {
   int shards = 1;
   nlohmann::json json;
 };
+
+// The files <prefix>-i-of-K.json in `dir` by i, with K in `shards` (left as it is if there is
+// none). Throws unjam::Error if they are of another K than each other or than `shards` (if
+// not 0 on entry).
+std::map<int, std::filesystem::path> find_shard_files(const std::filesystem::path& dir, const std::string& prefix,
+                                                      int& shards);
 
 // The K shard files of `prefix` in `dir`, parsed, in shard order; empty if there is none.
 // Throws unjam::Error if shards are missing or of different K, or one is not JSON.
