@@ -72,9 +72,7 @@ JobStatus job_status(const JobFiles& f, const Packing& p, const nlohmann::json& 
       st.saved_ago_s = age_seconds(*f.checkpoint);
       st.kind = JobStatus::Kind::kStarted;
     }
-  } catch (const nlohmann::json::exception& e) {
-    st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what()};
-  } catch (const Error& e) {
+  } catch (const std::exception& e) {  // unjam::Error, nlohmann's exceptions
     st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what()};
   }
   return st;
@@ -106,7 +104,11 @@ std::vector<JobFiles> find_jobs(const fs::path& out) {
 bool print_probe_status(const std::string& dir, const std::string& out_dir) {
   const fs::path out = out_dir.empty() ? fs::path(dir) : fs::path(out_dir);
   const std::vector<JobFiles> jobs = find_jobs(out);
-  if (jobs.empty()) return false;
+  if (jobs.empty()) {
+    if (!fs::exists(out / "probe_summary.json")) return false;
+    std::printf("the probe campaign in %s has finished: its outputs are there (probe_summary.json)\n", out.c_str());
+    return true;
+  }
   const Packing p = read_packing(dir);
   const int K = static_cast<int>(jobs.size());
   // The campaign's settings: those of the first job that has a readable file.

@@ -3,7 +3,6 @@
 // byte for byte (the rows are sorted by contact, the averages are fixed-point sums); with
 // --status it prints how far a probe campaign or job array has got (campaign_status.cpp).
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -28,14 +27,10 @@ void add_merge_command(CLI::App& app) {
                 "the whole campaign's checkpoint; the busy time left at its pace) and change nothing");
   cmd->callback([o] {
     if (o->status) {
-      const std::string out = o->out.empty() ? o->dir : o->out;
-      if (print_probe_status(o->dir, o->out)) return;
-      if (std::filesystem::exists(std::filesystem::path(out) / "probe_summary.json")) {
-        std::printf("the probe campaign in %s has finished: its outputs are there (probe_summary.json)\n", out.c_str());
-        return;
-      }
-      throw Error("no probe campaign in " + out +
-                  " (neither probe_checkpoint.json nor probe_shard-i-of-K.json / probe_checkpoint-shard-i-of-K.json)");
+      if (!print_probe_status(o->dir, o->out))
+        throw Error("no probe campaign in " + (o->out.empty() ? o->dir : o->out) +
+                    " (neither probe_checkpoint.json nor probe_shard-i-of-K.json / probe_checkpoint-shard-i-of-K.json)");
+      return;
     }
     const auto lock = lock_output(o->out.empty() ? o->dir : o->out, 0, 1);  // the merged outputs' writer
     const bool probes = merge_probe_shards(o->dir, o->out);

@@ -61,8 +61,9 @@ void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, 
 // are in `out` (default: `dir`) has got, from those files alone: each shard of a job array
 // (finished, n of m probes so far with its checkpoint's age, not started, unreadable) or the
 // whole campaign's checkpoint, the probes done, the busy time and the busy time left at that
-// pace. Reads with the settings the files record; changes nothing. Returns false if there is
-// neither a probe checkpoint nor a probe shard file.
+// pace; a campaign that has finished (probe_summary.json, no checkpoint) is said to have.
+// Reads with the settings the files record; changes nothing. Returns false if there is no
+// probe campaign in `out`.
 bool print_probe_status(const std::string& dir, const std::string& out);
 
 // The merges, from the commands that write the shards (cmd_probe.cpp, cmd_bounds.cpp);
