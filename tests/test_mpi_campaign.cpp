@@ -401,7 +401,90 @@ TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
   fs::create_directories(root_ / "empty");
   r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + (root_ / "empty").string() + "'"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("no probe campaign in"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no probe campaign or force bounds in"), std::string::npos) << r.output;
+}
+
+TEST_F(Distributed, MergeStatusSaysHowFarTheBoundsShardsHaveGot) {
+  // `unjam bounds --shard i/K` as a job array of 3: shard 0 finished, shard 1 stopped after 6
+  // LPs, shard 2 not started. `merge --status` counts LP values (fn_min and fn_max of each
+  // contact; shard i holds the contacts k with k mod 3 = i) and writes nothing; a damaged
+  // checkpoint and one of another shard are named unreadable; a whole run's checkpoint is read
+  // too, and finished bounds are said to be.
+  const auto bounds = [&](const std::string& name, const std::string& extra, int expect_code) {
+    fs::create_directories(root_ / name);
+    const CommandResult r = shell(unjam(0, "bounds '" + kP50.string() + "' --threads 1 --out '" +
+                                               (root_ / name / "bounds.csv").string() + "' " + extra));
+    EXPECT_EQ(r.exit_code, expect_code) << r.output;
+    return root_ / name;
+  };
+  const fs::path one = bounds("one", "", 0);
+  const int contacts = static_cast<int>(CsvTable::read(one / "bounds.csv").rows());
+  ASSERT_GE(contacts, 9);
+  const auto share = [&](int i) { return 2 * ((contacts - i + 2) / 3); };
+  const fs::path out = bounds("shards", "--shard 0/3", 0);
+  bounds("shards", "--shard 1/3 --stop-after 6", 3);
+  const auto listing = [&] {
+    std::string names;
+    for (const auto& e : fs::directory_iterator(out)) names += e.path().filename().string() + " " + read_file(e.path());
+    return names;
+  };
+  const std::string before = listing();
+  const std::string status = "merge '" + kP50.string() + "' --status --out '" + out.string() + "'";
+  CommandResult r = shell(unjam(0, status));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto saved = nlohmann::json::parse(read_file(out / "bounds_checkpoint-shard-1-of-3.json"));
+  int known = 0;
+  for (const char* end : {"fn_min", "fn_max"})
+    for (const auto& v : saved.at(end)) known += !v.is_null();
+  ASSERT_GE(known, 6);
+  ASSERT_LT(known, share(1));
+  for (const std::string& line :
+       {"force bounds of " + kP50.string() + " in " + out.string() + ": " + std::to_string(contacts) + " contacts, " +
+            std::to_string(2 * contacts) + " LP values (method barrier), 3 shards",
+        "shard 0/3: finished, " + std::to_string(share(0)) + " of " + std::to_string(share(0)) + " LP values, 1 run",
+        "shard 1/3: " + std::to_string(known) + " of " + std::to_string(share(1)) + " LP values, 1 run",
+        "shard 2/3: not started (" + std::to_string(share(2)) + " LP values)",
+        "done " + std::to_string(share(0) + known) + " of " + std::to_string(2 * contacts) + " LP values",
+        std::string("1 shard finished, 1 started, 1 not started"),
+        "the " + std::to_string(2 * contacts - share(0) - known) + " left: ~"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
+  EXPECT_EQ(r.output.find("probe campaign"), std::string::npos) << r.output;
+  EXPECT_EQ(listing(), before);
+
+  // a damaged checkpoint, then another shard's checkpoint in its place: named, the others reported
+  const fs::path checkpoint_1 = out / "bounds_checkpoint-shard-1-of-3.json";
+  const std::string kept = read_file(checkpoint_1);
+  write_file_atomic(checkpoint_1, "{");
+  r = shell(unjam(0, status));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("shard 1/3: unreadable (not a JSON object)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("shard 0/3: finished"), std::string::npos) << r.output;
+  write_file_atomic(out / "bounds_checkpoint-shard-2-of-3.json", kept);
+  write_file_atomic(checkpoint_1, kept);
+  r = shell(unjam(0, status));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("shard 2/3: unreadable (saved by shard 1/3, not 2/3)"), std::string::npos) << r.output;
+  fs::remove(out / "bounds_checkpoint-shard-2-of-3.json");
+
+  bounds("shards", "--shard 1/3", 0);
+  bounds("shards", "--shard 2/3", 0);
+  r = shell(unjam(0, status));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("done " + std::to_string(2 * contacts) + " of " + std::to_string(2 * contacts)),
+            std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("every shard has finished: `unjam merge " + kP50.string() + " --out " + out.string() +
+                          "` writes bounds.csv and bounds.json"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(" left: "), std::string::npos) << r.output;
+
+  const fs::path stopped = bounds("whole", "--stop-after 5", 3);
+  r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + stopped.string() + "'"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("  run: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" of " + std::to_string(2 * contacts) + " LP values, 1 run"), std::string::npos) << r.output;
+  r = shell(unjam(0, "merge '" + kP50.string() + "' --status --out '" + one.string() + "'"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the force bounds in " + one.string() + " have finished"), std::string::npos) << r.output;
 }
 
 TEST_F(Distributed, BoundsStoppedOnTwoRanksResumeOnThree) {

@@ -1,7 +1,8 @@
 // `unjam merge DIR`: joins the shards of a scheduler job array (`unjam probe ... --shard i/K`,
 // `unjam bounds ... --shard i/K`, one job each) into the files one run would have written,
 // byte for byte (the rows are sorted by contact, the averages are fixed-point sums); with
-// --status it prints how far a probe campaign or job array has got (campaign_status.cpp).
+// --status it prints how far a probe campaign or the force bounds, whole or as a job array, have
+// got (campaign_status.cpp).
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -23,13 +24,18 @@ void add_merge_command(CLI::App& app) {
   cmd->add_option("dir", o->dir, "packing directory")->required();
   cmd->add_option("--out", o->out, "directory of the shard files and the outputs (default: the packing directory)");
   cmd->add_flag("--status", o->status,
-                "print how far the probe campaign in the output directory has got (each shard of a job array, or "
-                "the whole campaign's checkpoint; the busy time left at its pace) and change nothing");
+                "print how far the probe campaign and the force bounds in the output directory have got (each "
+                "shard of a job array, or the whole run's checkpoint; the busy time left at its pace) and change "
+                "nothing");
   cmd->callback([o] {
     if (o->status) {
-      if (!print_probe_status(o->dir, o->out))
-        throw Error("no probe campaign in " + (o->out.empty() ? o->dir : o->out) +
-                    " (neither probe_checkpoint.json nor probe_shard-i-of-K.json / probe_checkpoint-shard-i-of-K.json)");
+      const bool probes = print_probe_status(o->dir, o->out);
+      const bool bounds = print_bounds_status(o->dir, o->out);
+      if (!probes && !bounds)
+        throw Error("no probe campaign or force bounds in " + (o->out.empty() ? o->dir : o->out) +
+                    " (none of probe_checkpoint.json, probe_shard-i-of-K.json, probe_checkpoint-shard-i-of-K.json, "
+                    "probe_summary.json, bounds_checkpoint.json, bounds_shard-i-of-K.json, "
+                    "bounds_checkpoint-shard-i-of-K.json, bounds.json)");
       return;
     }
     const auto lock = lock_output(o->out.empty() ? o->dir : o->out, 0, 1);  // the merged outputs' writer

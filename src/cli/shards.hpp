@@ -65,6 +65,10 @@ void claim_shard_contacts(const ShardFile& s, const std::vector<int>& contacts, 
 // Reads with the settings the files record; changes nothing. Returns false if there is no
 // probe campaign in `out`.
 bool print_probe_status(const std::string& dir, const std::string& out);
+// The same for the force bounds in `out` (`unjam bounds`, whole or `--shard i/K`), in LP values
+// (fn_min and fn_max of each contact): finished shards, checkpoints, not started; a run that has
+// finished (bounds.json, no checkpoint) is said to have. Returns false if there is none.
+bool print_bounds_status(const std::string& dir, const std::string& out);
 
 // The merges, from the commands that write the shards (cmd_probe.cpp, cmd_bounds.cpp);
 // each does nothing without shards and returns whether it merged.

@@ -68,34 +68,40 @@ void get_bounds_counts(const nlohmann::json& j, ForceBounds& b) {
   b.unscaled_solves = count("unscaled_solves", false);
 }
 
-BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
-    : file_(std::move(file)), settings_(std::move(settings)) {
-  require_writable(file_);  // before any LP, not at the first save
-  const std::optional<nlohmann::json> read = read_checkpoint(file_, settings_, "bounds checkpoint");
-  if (!read) return;
+std::optional<ForceBounds> read_bounds_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings,
+                                                  CampaignTime* runs) {
+  const std::optional<nlohmann::json> read = read_checkpoint(file, settings, "bounds checkpoint");
+  if (!read) return std::nullopt;
   const nlohmann::json& j = *read;
-  const std::string name = file_.string();
-  auto b = std::make_shared<ForceBounds>();
+  const std::string name = file.string();
+  ForceBounds b;
   try {
-    b->fn_min = values_of(j.at("fn_min"));
-    b->fn_max = values_of(j.at("fn_max"));
-    get_bounds_counts(j, *b);
+    b.fn_min = values_of(j.at("fn_min"));
+    b.fn_max = values_of(j.at("fn_max"));
+    get_bounds_counts(j, b);
   } catch (const std::exception& e) {
     throw Error(name + " is damaged (" + e.what() + "); remove it to start over");
   }
-  const auto contacts = settings_.value("contacts", -1);
-  if (b->fn_min.size() != contacts || b->fn_max.size() != contacts)
-    throw Error(name + " is damaged (" + std::to_string(b->fn_max.size()) + " values for " +
+  const auto contacts = settings.value("contacts", -1);
+  if (b.fn_min.size() != contacts || b.fn_max.size() != contacts)
+    throw Error(name + " is damaged (" + std::to_string(b.fn_max.size()) + " values for " +
                 std::to_string(contacts) + " contacts); remove it to start over");
-  if (b->min_lps_skipped > contacts)
+  if (b.min_lps_skipped > contacts)
     throw Error(name + " is damaged (min_lps_skipped is more than its " + std::to_string(contacts) +
                 " contacts); remove it to start over");
   // A minimum known is 0 (opened) or positive (ensemble/force_bounds); NaN: not known yet.
-  if ((b->fn_min.array() < 0.0).any())
+  if ((b.fn_min.array() < 0.0).any())
     throw Error(name + " is damaged (a negative fn_min); remove it to start over");
-  b->complete = false;
-  earlier_ = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(*b));
-  resumed_ = std::move(b);
+  b.complete = false;
+  if (runs) *runs = campaign_time_from_json(j.value("runs", nlohmann::json()), known_values(b));
+  return b;
+}
+
+BoundsCheckpoint::BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings)
+    : file_(std::move(file)), settings_(std::move(settings)) {
+  require_writable(file_);  // before any LP, not at the first save
+  std::optional<ForceBounds> b = read_bounds_checkpoint(file_, settings_, &earlier_);
+  if (b) resumed_ = std::make_shared<ForceBounds>(std::move(*b));
 }
 
 void BoundsCheckpoint::attach(ForceBoundsOptions& lp, double every_s, int stop_after, std::function<bool()> stop,

@@ -40,11 +40,17 @@ void put_bounds_counts(nlohmann::json& j, const ForceBounds& b);
 // naming the count, or nlohmann's exception for a count missing.
 void get_bounds_counts(const nlohmann::json& j, ForceBounds& b);
 
-// A checkpoint file and the run it belongs to. Constructing it checks that the file can be
-// written (unjam::Error if not, before any LP is solved) and reads the file if there is one:
-// a checkpoint of other settings is refused (unjam::Error naming the settings that differ,
-// core/checkpoint_settings), as is one that is not valid JSON or whose values do not fit the
+// The partial result saved in `file` by a run with `settings` (bounds_checkpoint_settings), and
+// in `runs` (if not null) the time of the runs that made it; nullopt if there is no such file.
+// Reads only. Throws unjam::Error, naming the file, for a checkpoint of other settings (naming
+// the settings that differ), one that is not valid JSON, or one whose values do not fit the
 // settings' number of contacts.
+std::optional<ForceBounds> read_bounds_checkpoint(const std::filesystem::path& file, const nlohmann::json& settings,
+                                                  CampaignTime* runs = nullptr);
+
+// A checkpoint file and the run it belongs to. Constructing it checks that the file can be
+// written (unjam::Error if not, before any LP is solved) and reads the file if there is one
+// (read_bounds_checkpoint, with its refusals).
 class BoundsCheckpoint {
  public:
   BoundsCheckpoint(std::filesystem::path file, nlohmann::json settings);
