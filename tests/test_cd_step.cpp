@@ -15,6 +15,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/cpu_time.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/lemke.hpp"
 #include "unjam/packing/packing_io.hpp"
@@ -353,6 +354,35 @@ TEST(CdPath, TheBranchFromTheStaticNetworkCanCloseOnItself) {
   const CdStepSolution c82 = probe_cd_path(p, 82, ProbeSettings{}, compliant, &soft);
   EXPECT_EQ(soft.failure, "");
   EXPECT_LE(c82.residual.max(), kExactStepTolerance);
+}
+
+TEST(CdPath, EachPathReportsItsFactorisationsAndItsCpuTime) {
+  // The continuation of contact 68 of p100-frozen-mu1 and its restarts (no solution, the test
+  // below): every path that took a piece factorised the system at least once and took CPU
+  // time; their CPU times together are within the thread's around the call; and the returned
+  // statistics are one path's, factorisations included.
+  const Packing& p = fixture("p100-frozen-mu1");
+  CdPathStats stats;
+  const double before = thread_cpu_seconds();
+  const CdStepSolution none = probe_cd_path(p, 68, quasi_static_step(), compliant(0), &stats);
+  const double spent = thread_cpu_seconds() - before;
+  ASSERT_EQ(none.f.size(), 0);
+  ASSERT_GE(stats.paths.size(), 2u);
+  double paths_cpu = 0.0;
+  for (const CdPathAttempt& a : stats.paths) {
+    ASSERT_GT(a.pieces, 0);
+    EXPECT_GE(a.factorizations, 1);
+    EXPECT_GT(a.cpu_seconds, 0.0);
+    paths_cpu += a.cpu_seconds;
+  }
+  EXPECT_LE(paths_cpu, spent);
+  // the returned statistics are those of one path (the lowest residual's), its factorisations too
+  const auto returned = std::find_if(stats.paths.begin(), stats.paths.end(), [&](const CdPathAttempt& a) {
+    return a.pieces == stats.pieces && a.lowerings == stats.lowerings;
+  });
+  ASSERT_NE(returned, stats.paths.end());
+  EXPECT_EQ(stats.factorizations, returned->factorizations);
+  EXPECT_EQ(stats.interior_cpu_seconds, 0.0);  // not the interior-point start
 }
 
 TEST(CdPath, SofterStartsSolveWhereTheFirstStartsContinuationFindsNone) {

@@ -747,6 +747,11 @@ TEST_F(CliProbe, SaysWhenTheInteriorPointMethodRanAgainInTheWideNeighbourhood) {
                                 "--cd-interior-neighbourhood 1e-3 --threads 1 --out " + q(root_ / "wide"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("interior-point start: 100 iterations, natural residual 5."), std::string::npos) << r.output;
+  // where the probe's time went: the interior-point method's and each path's CPU
+  EXPECT_NE(r.output.find("(F0, g / dt^2); "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" pieces, "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" factorisations, "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" s of CPU\n"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("again in the wide neighbourhood: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("its iterate is the start"), std::string::npos) << r.output;
   r = run_tool("probe " + q(p200) + " --contact 48 --method cd --cd-start interior --threads 1 --out " +

@@ -181,8 +181,9 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
 // got and how it ended, so that a user sees why a probe is or is not exact.
 void print_cd_paths(const CdPathStats& stats) {
   if (stats.interior_iterations > 0)
-    std::printf("  interior-point start: %d iterations, natural residual %.2e (F0, g / dt^2)\n",
-                stats.interior_iterations, stats.interior_residual);
+    std::printf("  interior-point start: %d iterations, natural residual %.2e (F0, g / dt^2); %s of CPU\n",
+                stats.interior_iterations, stats.interior_residual,
+                format_duration(stats.interior_cpu_seconds).c_str());
   if (stats.interior_again_iterations > 0)
     std::printf("  again in the wide neighbourhood: %d iterations (%d by plain Newton steps), natural residual %.2e; "
                 "%s\n",
@@ -207,9 +208,11 @@ void print_cd_paths(const CdPathStats& stats) {
     else
       std::printf("full opening%s", a.lowerings > 0 ? "; lowered to the rigid step" : "");
     if (a.residual == kNoSolution)
-      std::printf("; no solution; %d pieces\n", a.pieces);
+      std::printf("; no solution");
     else
-      std::printf("; residual %.2e g; %d pieces\n", a.residual, a.pieces);
+      std::printf("; residual %.2e g", a.residual);
+    std::printf("; %d pieces, %d factorisations, %s of CPU\n", a.pieces, a.factorizations,
+                format_duration(a.cpu_seconds).c_str());
   }
 }
 

@@ -14,6 +14,7 @@
 #include <Eigen/Sparse>
 
 #include "unjam/contact/equilibrium_matrix.hpp"
+#include "unjam/core/cpu_time.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/probe/kinematic_probe.hpp"
 #include "unjam/solver/interior_point.hpp"
@@ -995,11 +996,13 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
         path_compliance = at.compliance;
       }
       const int stall = iterate_states ? ps.interior_states_stall : 0;
+      const double cpu_start = thread_cpu_seconds();
       CdStepSolution sol =
           follow(pb, packing, at, from_guess, path_compliance, at.compliance, stats, budget, settings.cancel, stall);
       paths.push_back({path_compliance, stats.compliance_end, stats.lambda_max,
                        sol.f.size() > 0 ? sol.residual.max() : kNoSolution, stats.pieces, stats.lowerings,
-                       stats.failure, iterate_states, other_iterate, stats.compliance_settled});
+                       stats.failure, iterate_states, other_iterate, stats.compliance_settled, stats.factorizations,
+                       thread_cpu_seconds() - cpu_start});
       // restart_divisor below where this lowering stopped (or this path's start, where it failed),
       // never below the rigid compliance itself: a path there is the static start's.
       if (soft)
@@ -1054,7 +1057,9 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
                              const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
   std::optional<InteriorIterates> iterates;
+  const double interior_cpu_start = thread_cpu_seconds();
   if (ps.start == CdPathStart::interior_point) iterates = interior_iterates(pb, ps);
+  const double interior_cpu = thread_cpu_seconds() - interior_cpu_start;
   CdPathStats kept;
   CdStepSolution sol = probe_from_start(packing, pb, settings, ps, &kept, iterates ? &iterates->start : nullptr);
   if (iterates) {
@@ -1086,6 +1091,7 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
     kept.pieces_all = used;
     kept.budget_spent = spent;
     record_interior(*iterates, kept);
+    kept.interior_cpu_seconds = interior_cpu;
     sol.result.sweeps = kept.pieces_all;
   }
   kept.accepted = sol.f.size() > 0 && !sol.result.converged && !kept.budget_spent &&

@@ -165,6 +165,9 @@ struct CdPathAttempt {
                                 // the one with the higher natural residual; CdPathSettings::interior_neighbourhood)
   double compliance_settled = 0.0;  // where its lowering ended at an exact solution by
                                     // CdPathSettings::settle_compliance (0: it did not)
+  int factorizations = 0;           // of the reduced system along it, its lowerings included
+  double cpu_seconds = 0.0;         // CPU time of the thread that followed it (s); for the
+                                    // user to see where a probe's time went, never a result
 };
 
 struct CdPathStats {
@@ -185,6 +188,7 @@ struct CdPathStats {
   double compliance_settled = 0.0;  // the compliance where the returned attempt's lowering ended at
                                     // an exact solution by CdPathSettings::settle_compliance; 0 if not
   int interior_iterations = 0;  // interior_point: iterations of the interior-point method
+  double interior_cpu_seconds = 0.0;  // interior_point: CPU time of its run(s) (s; never a result)
   double interior_residual = 0.0;  // interior_point: its natural residual at the end (F0, g / dt^2)
   // interior_point, where it ran again in the neighbourhood: that run's iterations, plain Newton
   // steps among them (InteriorPointResult::short_steps) and natural residual, and whether its
