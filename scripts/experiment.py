@@ -18,8 +18,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
   exact        with --cd-sample K > 0 (300 at the paper scale), on the sweep's packings of at
                most --cd-max-n disks (500): `unjam probe DIR --sample K --seed 1 --method cd
                --cd-start interior` (--cd-start; --cd-max-pieces, --cd-accept-residual,
-               --cd-compliant-start, --cd-softer-starts, --cd-settle-compliance and
-               --cd-lost-factor passed on where given)
+               --cd-compliant-start, --cd-softer-starts, --cd-settle-compliance,
+               --cd-lost-factor and --cd-restart-floor passed on where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
                the same contacts, into DIR/exact-cd and DIR/exact-lp;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe cd`, plot_fig4.py;
@@ -134,6 +134,10 @@ def parse_args(argv):
                    "path whose forces at the full opening have a residual above L times its "
                    "compliance (at least 1e-3) in g, >= 0 (`unjam probe --cd-lost-factor`; default "
                    "0: off; docs/probe.md, \"Paths that lose their digits\")")
+    p.add_argument("--cd-restart-floor", type=float, metavar="C", help="the exact probe's "
+                   "continuation is not restarted below this compliance, its next softer start "
+                   "follows instead, >= 0 (`unjam probe --cd-restart-floor`; default 0: every "
+                   "restart; docs/probe.md, \"Restarts below a floor\")")
     p.add_argument("--probe-g", type=float, default=1e-9,
                    help="opening gap g of the probes (R_max; default 1e-9)")
     p.add_argument("--mpi", type=int, default=0, metavar="K",
@@ -175,6 +179,9 @@ def parse_args(argv):
     if args.cd_lost_factor is not None and not (math.isfinite(args.cd_lost_factor)
                                                 and args.cd_lost_factor >= 0):
         p.error(f"--cd-lost-factor must be a finite number >= 0, got {args.cd_lost_factor}")
+    if args.cd_restart_floor is not None and not (math.isfinite(args.cd_restart_floor)
+                                                  and args.cd_restart_floor >= 0):
+        p.error(f"--cd-restart-floor must be a finite number >= 0, got {args.cd_restart_floor}")
     if args.mus is not None and not all(math.isfinite(m) and m >= 0 for m in args.mus):
         p.error(f"--mus: every friction coefficient must be a finite number >= 0, got {args.mus}")
     if args.ns is not None and not all(n >= 8 for n in args.ns):
@@ -198,7 +205,7 @@ def main(argv=None):
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
               "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start",
-              "cd_softer_starts", "cd_settle_compliance", "cd_lost_factor"):
+              "cd_softer_starts", "cd_settle_compliance", "cd_lost_factor", "cd_restart_floor"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)
     cfg["mus"] = sorted(set(float(m) for m in cfg["mus"]))

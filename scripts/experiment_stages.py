@@ -43,9 +43,12 @@ PY = sys.executable or "/usr/bin/python3"
 # (`unjam probe --cd-settle-compliance`; 0: unjam's default, never; docs/probe.md, "Settling at
 # an exact solution"). cd_lost_factor: drop the paths whose forces lost their digits (`unjam
 # probe --cd-lost-factor`; 0: unjam's default, off; docs/probe.md, "Paths that lose their digits").
+# cd_restart_floor: no restart of the continuation below this compliance (`unjam probe
+# --cd-restart-floor`; 0: unjam's default, every restart; docs/probe.md, "Restarts below a floor").
 # They are passed to unjam only where set, so stages cached without them stay valid.
 CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start": 0,
-               "cd_softer_starts": -1, "cd_settle_compliance": 0, "cd_lost_factor": 0}
+               "cd_softer_starts": -1, "cd_settle_compliance": 0, "cd_lost_factor": 0,
+               "cd_restart_floor": 0}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
              "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
@@ -211,7 +214,8 @@ def cd_options(cfg):
                       ("cd_compliant_start", "--cd-compliant-start"),
                       ("cd_softer_starts", "--cd-softer-starts"),
                       ("cd_settle_compliance", "--cd-settle-compliance"),
-                      ("cd_lost_factor", "--cd-lost-factor")):
+                      ("cd_lost_factor", "--cd-lost-factor"),
+                      ("cd_restart_floor", "--cd-restart-floor")):
         value = cfg.get(key, CD_DEFAULTS[key])
         if value != CD_DEFAULTS[key]:
             args += [flag, str(value) if isinstance(value, int) else repr(value)]

@@ -610,6 +610,43 @@ TEST(CdPath, TheCompliantContinuationRestartsBelowWhereItsLoweringStops) {
   EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, negative), Error);
 }
 
+TEST(CdPath, NoRestartBelowTheFloorTheNextSofterStartInstead) {
+  // p200-mu1, contact 14 (the test above): its lowering from 0.1 stops at ~0.012 and the restart
+  // at a tenth of that is exact. With the floor above that restart's compliance
+  // (CdPathSettings::restart_floor, `--cd-restart-floor`), the restart is not followed and the
+  // next path is the softer start at compliance 1; with the floor below it, the probe is the
+  // default's, bit for bit (docs/probe.md, "Restarts below a floor").
+  const Packing& p = fixture("p200-mu1");
+  CdPathSettings every;
+  every.start = CdPathStart::compliant;
+  CdPathStats by_default;
+  const CdStepSolution s = probe_cd_path(p, 14, ProbeSettings{}, every, &by_default);
+  ASSERT_EQ(by_default.paths.size(), 2u);
+  const double restart = by_default.paths[1].compliance;
+  ASSERT_LT(restart, 0.01);
+  CdPathSettings below = every;
+  below.restart_floor = 0.5 * restart;
+  CdPathStats same;
+  const CdStepSolution t = probe_cd_path(p, 14, ProbeSettings{}, below, &same);
+  EXPECT_EQ(t.result.f_crit, s.result.f_crit);
+  EXPECT_EQ(same.pieces_all, by_default.pieces_all);
+  ASSERT_EQ(same.paths.size(), 2u);
+  EXPECT_EQ(same.paths[1].compliance, restart);
+  CdPathSettings above = every;
+  above.restart_floor = 2.0 * restart;
+  CdPathStats floored;
+  probe_cd_path(p, 14, ProbeSettings{}, above, &floored);
+  ASSERT_GE(floored.paths.size(), 2u);
+  EXPECT_EQ(floored.paths[0].compliance_end, by_default.paths[0].compliance_end);
+  EXPECT_EQ(floored.paths[1].compliance, 1.0);  // the first softer start
+  for (const CdPathAttempt& a : floored.paths) EXPECT_GE(a.compliance, above.restart_floor) << a.compliance;
+  CdPathSettings bad = every;
+  bad.restart_floor = -1.0;
+  EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, bad), Error);
+  bad.restart_floor = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(probe_cd_path(p, 14, ProbeSettings{}, bad), Error);
+}
+
 TEST(CdPath, APathThatLostItsDigitsIsDroppedAndTheContinuationGoesSofter) {
   // CdPathSettings::lost_factor (`--cd-lost-factor`; docs/probe.md, "Paths that lose their
   // digits"), on p200-mu1, contact 34, compliant start at the quasi-static step. At a factor of

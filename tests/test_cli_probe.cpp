@@ -850,6 +850,8 @@ TEST_F(CliProbe, SettlesAtAnExactSolutionWhereTheUserSaysAndTheCampaignRecordsIt
   EXPECT_EQ(read_json_file(budget / "probe_summary.json")["over_budget"]["exact"].get<int>(), stopped_exact);
   expect_recorded_where_set(campaign, "--cd-settle-compliance 1e-5", "cd_settle_compliance", 1e-5);
   expect_recorded_where_set(campaign, "--cd-lost-factor 1e3", "cd_lost_factor", 1e3);
+  expect_recorded_where_set(campaign, "--cd-restart-floor 1e-3", "cd_restart_floor", 1e-3);
+  run_printing(campaign + "--cd-restart-floor 1e-3 --out " + q(root_ / "floor"), {", no restart below compliance 0.001"});
 }
 
 TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {

@@ -289,6 +289,8 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-settle-compliance -1 --out " + out.string(), "--cd-settle-compliance"},
       {"probe " + fixture.string() + " --contact 1 --cd-lost-factor 1e3 --out " + out.string(), "--cd-lost-factor applies to the cd method, not to lp"},
       {"probe " + fixture.string() + " --contact 1 --method cd --cd-lost-factor -1 --out " + out.string(), "--cd-lost-factor"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-restart-floor 1e-3 --out " + out.string(), "--cd-restart-floor applies to the cd method's compliant and interior starts only"},
+      {"probe " + fixture.string() + " --contact 1 --method cd --cd-start compliant --cd-restart-floor -1 --out " + out.string(), "--cd-restart-floor"},
       {"ensemble " + fixture.string() + " --thin -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --burn-in -1", "must be a finite number >= 0"},
       {"ensemble " + fixture.string() + " --probe-g nan", "must be a finite number > 0"},

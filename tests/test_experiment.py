@@ -339,13 +339,13 @@ class ExperimentTiny(unittest.TestCase):
         self.assertIn("| stopped by the budget |", report)
 
     def test_9c_exact_probe_options_are_passed_on_where_given(self):
-        # --cd-accept-residual, --cd-compliant-start, --cd-settle-compliance and --cd-lost-factor reach `unjam probe` (recorded in the cd
+        # --cd-accept-residual, --cd-compliant-start, --cd-settle-compliance, --cd-lost-factor and --cd-restart-floor reach `unjam probe` (recorded in the cd
         # summary's settings), the budget of test_9b is gone from the command (so its stages run
         # again), the accepted probes are counted in exact-probe.csv as in the summary, and the
         # report names both options.
         res, rows = self.run_exact_stages("--cd-accept-residual", "1e-4", "--cd-compliant-start", "1e-3",
                                           "--cd-softer-starts", "0", "--cd-settle-compliance", "1e-5",
-                                          "--cd-lost-factor", "1e3")
+                                          "--cd-lost-factor", "1e3", "--cd-restart-floor", "1e-5")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1", "exact-cd")
             with open(os.path.join(d, "probe_summary.json")) as f:
@@ -354,6 +354,7 @@ class ExperimentTiny(unittest.TestCase):
             self.assertEqual(s["settings"]["cd_compliant_start"], 1e-3)
             self.assertEqual(s["settings"]["cd_settle_compliance"], 1e-5)
             self.assertEqual(s["settings"]["cd_lost_factor"], 1e3)
+            self.assertEqual(s["settings"]["cd_restart_floor"], 1e-5)
             self.assertNotIn("cd_softer_starts", s["settings"])  # 0: one start, recorded where on
             self.assertNotIn("over_budget", s)
             self.assertEqual(int(r["accepted"]), s["accepted"]["probes"], mu)
@@ -366,11 +367,12 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(self.out, "report.md")) as f:
             report = f.read()
         self.assertIn("--cd-accept-residual 0.0001, --cd-compliant-start 0.001, --cd-softer-starts 0, "
-                      "--cd-settle-compliance 1e-05, --cd-lost-factor 1000.0", report)
+                      "--cd-settle-compliance 1e-05, --cd-lost-factor 1000.0, --cd-restart-floor 1e-05", report)
         self.assertIn("| near-exact, accepted |", report)
         self.assertNotIn("--cd-max-pieces 2", report)
         self.assertIn("--cd-start interior --cd-accept-residual 0.0001 --cd-compliant-start 0.001 "
-                      "--cd-softer-starts 0 --cd-settle-compliance 1e-05 --cd-lost-factor 1000.0 (and lp)", report)  # the stages' own lines in the timings
+                      "--cd-softer-starts 0 --cd-settle-compliance 1e-05 --cd-lost-factor 1000.0 "
+                      "--cd-restart-floor 1e-05 (and lp)", report)  # the stages' own lines in the timings
 
 
 class ExactProbeTable(unittest.TestCase):

@@ -592,8 +592,8 @@ def test_the_cd_settings_are_one_typed_object():
     assert (d.start, d.compliant_start, d.softer_starts, d.max_pieces, d.accept_residual) == \
         ("static", 0.1, 2, 0, 1e-6)
     assert (d.interior_states_pieces, d.interior_states_stall, d.interior_states_retries,
-            d.interior_iterations, d.interior_neighbourhood, d.settle_compliance, d.lost_factor) == \
-        (0.1, 20, 2, 100, 0.0, 0.0, 0.0)
+            d.interior_iterations, d.interior_neighbourhood, d.settle_compliance, d.lost_factor,
+            d.restart_floor) == (0.1, 20, 2, 100, 0.0, 0.0, 0.0, 0.0)
     s = unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert s != d and s == unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
@@ -615,6 +615,8 @@ def test_the_cd_settings_are_one_typed_object():
                                   ("settle_compliance", float("nan"), "--cd-settle-compliance must be >= 0"),
                                   ("lost_factor", -1.0, "--cd-lost-factor must be >= 0"),
                                   ("lost_factor", float("inf"), "--cd-lost-factor must be >= 0"),
+                                  ("restart_floor", -1e-5, "--cd-restart-floor must be >= 0"),
+                                  ("restart_floor", float("nan"), "--cd-restart-floor must be >= 0"),
                                   ("start", "soft", "--cd-start must be static, lp, compliant or interior")]:
         t = copy.copy(s)
         with pytest.raises(unjam.Error, match=message):
@@ -642,7 +644,7 @@ def test_the_cd_settings_are_one_typed_object():
     # exact solution below a compliance of 1e-5, in 8 pieces against 134 (docs/probe.md,
     # "Settling at an exact solution"); pickled and compared with the other fields.
     settled = unjam.CdSettings(start="compliant", settle_compliance=1e-5)
-    assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0)")
+    assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0, restart_floor=0.0)")
     assert pickle.loads(pickle.dumps(settled)) == settled
     assert settled != unjam.CdSettings(start="compliant")
     a = unjam.probe(p, contact=34, method="cd", cd=settled)
@@ -656,6 +658,13 @@ def test_the_cd_settings_are_one_typed_object():
     kept = unjam.probe(p, contact=34, method="cd", cd=unjam.CdSettings(start="compliant", lost_factor=1e300))
     assert (lost.converged, lost.residual) == (False, sys.float_info.max)
     assert (kept.f_crit, kept.sweeps) == (b.f_crit, b.sweeps)
+    # restart_floor (`--cd-restart-floor`, through cd= only): contact 8's exact solution comes
+    # from a restart (the search above); with no restart allowed the probe takes other paths
+    floored = unjam.CdSettings(start="compliant", restart_floor=1.0)
+    assert pickle.loads(pickle.dumps(floored)) == floored and floored != unjam.CdSettings(start="compliant")
+    assert unjam.probe(p, contact=8, method="cd", cd=floored).sweeps != 279
+    with pytest.raises(unjam.Error, match="applies to the cd method's compliant and interior starts only"):
+        unjam.probe(p, contact=8, method="cd", cd=unjam.CdSettings(restart_floor=1e-3))
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -437,8 +437,11 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
     std::snprintf(settle, sizeof settle, ", settling at exact solutions at compliances <= %g", s.cd.settle_compliance);
   if (s.cd.lost_factor > 0.0)  // cd only (validate)
     std::snprintf(lost, sizeof lost, ", dropping paths that lose their digits (factor %g)", s.cd.lost_factor);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, lost, omp_get_max_threads(),
+  char floor[64] = "";
+  if (s.cd.restart_floor > 0.0)  // the continuation only (validate)
+    std::snprintf(floor, sizeof floor, ", no restart below compliance %g", s.cd.restart_floor);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, lost, floor, omp_get_max_threads(),
                spread.c_str());
   CheckpointedCampaignResult r;
   {
@@ -768,6 +771,12 @@ void add_probe_command(CLI::App& app) {
                   "their digits. It is not lowered, and the compliant continuation goes on to its next softer "
                   "start instead of restarting below it (0: off, such a path is lowered and restarted as any other; "
                   "e.g. 1e3; docs/probe.md, \"Paths that lose their digits\")")
+      ->capture_default_str()
+      ->check(non_negative_number());
+  cmd->add_option("--cd-restart-floor", o->cd.restart_floor,
+                  "cd, compliant and interior starts: follow no restart of the compliant continuation below this "
+                  "compliance (a fraction of g / (dt^2 F0)); the next softer start is followed instead (0: every "
+                  "restart; docs/probe.md, \"Restarts below a floor\")")
       ->capture_default_str()
       ->check(non_negative_number());
   cmd->add_option("--window", o->window,

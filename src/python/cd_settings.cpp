@@ -46,6 +46,7 @@ py::dict fields(const CdPathSettings& s) {
   d["interior_neighbourhood"] = s.interior_neighbourhood;
   d["settle_compliance"] = s.settle_compliance;
   d["lost_factor"] = s.lost_factor;
+  d["restart_floor"] = s.restart_floor;
   return d;
 }
 
@@ -92,12 +93,13 @@ void bind_cd_settings(py::module_& m) {
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                    double settle_compliance, double lost_factor) {
+                    double settle_compliance, double lost_factor, double restart_floor) {
           CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
                                          interior_states_pieces, interior_states_stall, interior_states_retries,
                                          interior_iterations, interior_neighbourhood);
           s.settle_compliance = settle_compliance;
           s.lost_factor = lost_factor;
+          s.restart_floor = restart_floor;
           validate(s);
           return s;
         }),
@@ -109,7 +111,8 @@ void bind_cd_settings(py::module_& m) {
         py::arg("interior_states_retries") = d.interior_states_retries,
         py::arg("interior_iterations") = d.interior_max_iterations,
         py::arg("interior_neighbourhood") = d.interior_neighbourhood,
-        py::arg("settle_compliance") = d.settle_compliance, py::arg("lost_factor") = d.lost_factor);
+        py::arg("settle_compliance") = d.settle_compliance, py::arg("lost_factor") = d.lost_factor,
+        py::arg("restart_floor") = d.restart_floor);
   c.def_property(
       "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
       [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
@@ -149,6 +152,10 @@ void bind_cd_settings(py::module_& m) {
                 "drop a path whose forces at the full opening have a residual above this factor times its "
                 "compliance (at least 1e-3) in g, >= 0 (0: off; --cd-lost-factor; docs/probe.md, \"Paths that "
                 "lose their digits\")");
+  checked_field(c, "restart_floor", &CdPathSettings::restart_floor,
+                "the compliance below which the compliant continuation is not restarted (its next softer start "
+                "follows instead), >= 0 (0: every restart; --cd-restart-floor; docs/probe.md, \"Restarts below a "
+                "floor\")");
   c.def("__repr__", &repr);
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });

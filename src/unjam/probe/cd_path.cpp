@@ -941,6 +941,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     throw Error("cd path: settle_compliance must be >= 0 and finite (got " + std::to_string(ps.settle_compliance) + ")");
   if (!(ps.lost_factor >= 0.0 && std::isfinite(ps.lost_factor)))
     throw Error("cd path: lost_factor must be >= 0 and finite (got " + std::to_string(ps.lost_factor) + ")");
+  if (!(ps.restart_floor >= 0.0 && std::isfinite(ps.restart_floor)))
+    throw Error("cd path: restart_floor must be >= 0 and finite (got " + std::to_string(ps.restart_floor) + ")");
   PieceBudget budget{0, ps.max_probe_pieces};
   CdStepSolution best;
   CdPathStats best_stats;
@@ -973,6 +975,8 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
     double scaled = 0.0;  // lambda_max / compliance of the last restart that stopped short of lambda = 1
     for (int attempt = 0; attempt < attempts; ++attempt) {
       if (attempt >= first_retry && (!ps.retry || (soft && !(start > ps.compliance)))) break;
+      // below restart_floor a restart is not followed: the next softer start is
+      if (soft && attempt >= first_retry && start < ps.restart_floor) break;
       if (attempt > 0 && budget.spent()) break;
       CdPathStats stats;
       CdPathSettings at = ps;

@@ -109,6 +109,12 @@ struct CdPathSettings {
   int lowering_retries = 4;
   double restart_divisor = 10.0;
   int max_restarts = 6;
+  // No restart below restart_floor (a compliance, as `compliance`): where the next restart
+  // would be stiffer, the next softer start is followed instead (`--cd-restart-floor`; 0, the
+  // default: every restart). At 2000 disks the static network's branch does not carry to the
+  // full opening at compliances ~1e-6, and a restart there spends pieces at a factorisation
+  // every few (docs/probe.md, "Restarts below a floor").
+  double restart_floor = 0.0;
   // CdPathStart::compliant (and the interior start's fallback): where the continuation from
   // compliant_start (with its restarts) ends without an exact solution, it is followed again
   // from softer_factor times that compliance, up to softer_starts times (the lowest residual

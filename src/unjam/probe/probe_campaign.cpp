@@ -230,6 +230,8 @@ void validate(const CdPathSettings& cd) {
     throw Error("--cd-settle-compliance must be >= 0 and finite (got " + std::to_string(cd.settle_compliance) + ")");
   if (!(cd.lost_factor >= 0.0 && std::isfinite(cd.lost_factor)))
     throw Error("--cd-lost-factor must be >= 0 and finite (got " + std::to_string(cd.lost_factor) + ")");
+  if (!(cd.restart_floor >= 0.0 && std::isfinite(cd.restart_floor)))
+    throw Error("--cd-restart-floor must be >= 0 and finite (got " + std::to_string(cd.restart_floor) + ")");
   if (!(cd.interior_states_pieces >= 0.0 && std::isfinite(cd.interior_states_pieces)))
     throw Error("--cd-interior-states-pieces must be >= 0 and finite (got " +
                 std::to_string(cd.interior_states_pieces) + ")");
@@ -257,6 +259,8 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-softer-starts applies to the cd method's compliant and interior starts only");
   if (s.cd.compliant_start != CdPathSettings{}.compliant_start && !has_continuation(s))
     throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
+  if (s.cd.restart_floor > 0.0 && !has_continuation(s))
+    throw Error("--cd-restart-floor applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
     throw Error(std::string("--cd-max-pieces applies to the cd method, not to ") + method_name(s.method));
   if (s.cd.accept_residual != CdPathSettings{}.accept_residual && s.method != ProbeMethod::kCd)
@@ -505,6 +509,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
     // checkpoints made before it was a setting, so that those still resume.
     if (has_continuation(s) && s.cd.compliant_start != kUnrecordedCompliantStart)
       j["cd_compliant_start"] = s.cd.compliant_start;
+    if (has_continuation(s) && s.cd.restart_floor > 0.0)
+      j["cd_restart_floor"] = s.cd.restart_floor;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
       // The first path from the iterate's own states (docs/probe.md, "The iterate's own
       // states"), its cut where it stops gaining ground and its retries at softer compliances:
@@ -548,7 +554,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
       "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
       "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
-      "cd_lost_factor", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
+      "cd_lost_factor", "cd_restart_floor", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
   for (const auto& [key, value] : j.items())
     if (kKnown.count(key) == 0) throw Error(name + " have a setting this unjam does not know: '" + key + "'");
   CampaignSettings s = campaign_settings_for(p);
@@ -584,6 +590,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       if (has_continuation(s)) {
         s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));
         s.cd.compliant_start = number("cd_compliant_start", kUnrecordedCompliantStart);
+        s.cd.restart_floor = number("cd_restart_floor", 0.0);
       }
       if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
         s.cd.interior_states_pieces = number("cd_interior_states_pieces", 0.0);
