@@ -36,6 +36,13 @@ using CommandResult = testing::ToolRun;
 
 CommandResult shell(const std::string& cmd) { return testing::run_command(cmd); }
 
+// Every file of `dir` by name with its contents: what `merge --status` must leave as it was.
+std::string listing(const fs::path& dir) {
+  std::string names;
+  for (const auto& e : fs::directory_iterator(dir)) names += e.path().filename().string() + " " + read_file(e.path());
+  return names;
+}
+
 std::string unjam(int ranks, const std::string& args) {
   const std::string bin = std::string("'") + UNJAM_BINARY + "' " + args;
   if (ranks == 0) return bin;
@@ -350,12 +357,7 @@ TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
   const auto share = [&](int i) { return (total - i + 2) / 3; };
   const fs::path out = probe("status", 0, "--shard 0/3");
   probe("status", 0, "--shard 1/3 --stop-after 2", 3);
-  const auto listing = [&] {
-    std::string names;
-    for (const auto& e : fs::directory_iterator(out)) names += e.path().filename().string() + " " + read_file(e.path());
-    return names;
-  };
-  const std::string before = listing();
+  const std::string before = listing(out);
   const std::string status = "merge '" + kP50.string() + "' --status --out '" + out.string() + "'";
   CommandResult r = shell(unjam(0, status));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -370,7 +372,7 @@ TEST_F(Distributed, MergeStatusSaysHowFarEachShardHasGotAndChangesNothing) {
         "the " + std::to_string(total - share(0) - 2) + " left: ~"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
   EXPECT_EQ(r.output.find("every shard has finished"), std::string::npos) << r.output;
-  EXPECT_EQ(listing(), before);
+  EXPECT_EQ(listing(out), before);
 
   const fs::path checkpoint_1 = out / "probe_checkpoint-shard-1-of-3.json";
   const std::string saved = read_file(checkpoint_1);
@@ -423,12 +425,7 @@ TEST_F(Distributed, MergeStatusSaysHowFarTheBoundsShardsHaveGot) {
   const auto share = [&](int i) { return 2 * ((contacts - i + 2) / 3); };
   const fs::path out = bounds("shards", "--shard 0/3", 0);
   bounds("shards", "--shard 1/3 --stop-after 6", 3);
-  const auto listing = [&] {
-    std::string names;
-    for (const auto& e : fs::directory_iterator(out)) names += e.path().filename().string() + " " + read_file(e.path());
-    return names;
-  };
-  const std::string before = listing();
+  const std::string before = listing(out);
   const std::string status = "merge '" + kP50.string() + "' --status --out '" + out.string() + "'";
   CommandResult r = shell(unjam(0, status));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -449,7 +446,7 @@ TEST_F(Distributed, MergeStatusSaysHowFarTheBoundsShardsHaveGot) {
         "the " + std::to_string(2 * contacts - share(0) - known) + " left: ~"})
     EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;
   EXPECT_EQ(r.output.find("probe campaign"), std::string::npos) << r.output;
-  EXPECT_EQ(listing(), before);
+  EXPECT_EQ(listing(out), before);
 
   // a damaged checkpoint, then another shard's checkpoint in its place: named, the others reported
   const fs::path checkpoint_1 = out / "bounds_checkpoint-shard-1-of-3.json";

@@ -105,9 +105,25 @@ std::vector<JobFiles> find_jobs(const fs::path& out, const std::string& finished
   return jobs;
 }
 
+// What `read` gives for the first job with a file it reads (the run's settings); throws
+// unjam::Error naming `what` and the last reason where there is none.
+template <class T, class Read>
+T first_readable(const std::vector<JobFiles>& jobs, Read read, const std::string& what) {
+  std::string why;
+  for (const JobFiles& f : jobs) {
+    if (!f.finished && !f.checkpoint) continue;
+    try {
+      return read(f);
+    } catch (const std::exception& e) {  // unjam::Error, nlohmann's exceptions
+      why = e.what();
+    }
+  }
+  throw Error("no readable " + what + " (" + why + ")");
+}
+
 // Prints one line per job (`planned[i]` tasks of `unit`, e.g. "probes", each; a job that is the
-// whole run is named `whole`), the totals and the
-// busy time left at the jobs' pace; `merge` says how to join the shards once all have finished.
+// whole run is named `whole`), the totals and the busy time left at the jobs' pace; `merge`
+// says how to join the shards once all have finished.
 void print_jobs(const std::vector<long long>& planned, const std::vector<JobStatus>& jobs, const char* whole,
                 const char* unit, const char* unit_one, const std::string& merge) {
   const int K = static_cast<int>(jobs.size());
@@ -173,20 +189,9 @@ bool print_probe_status(const std::string& dir, const std::string& out_dir) {
   }
   const Packing p = read_packing(dir);
   const int K = static_cast<int>(jobs.size());
-  // The campaign's settings: those of the first job that has a readable file.
-  std::optional<nlohmann::json> settings;
-  std::string settings_error;
-  for (const JobFiles& f : jobs) {
-    if (!f.finished && !f.checkpoint) continue;
-    try {
-      settings = recorded_settings(f);
-      break;
-    } catch (const std::exception& e) {
-      settings_error = e.what();
-    }
-  }
-  if (!settings) throw Error("no readable probe campaign file in " + out.string() + " (" + settings_error + ")");
-  const CampaignSettings s = campaign_settings_from_json(*settings, p, "the settings recorded in " + out.string());
+  const nlohmann::json settings =
+      first_readable<nlohmann::json>(jobs, recorded_settings, "probe campaign file in " + out.string());
+  const CampaignSettings s = campaign_settings_from_json(settings, p, "the settings recorded in " + out.string());
   const std::vector<int> targets = campaign_targets(p, s);
   std::printf("probe campaign of %s in %s: %zu probes (method %s)%s\n", dir.c_str(), out.c_str(), targets.size(),
               method_name(s.method), K > 1 ? (", " + std::to_string(K) + " shards").c_str() : "");
@@ -194,7 +199,7 @@ bool print_probe_status(const std::string& dir, const std::string& out_dir) {
   std::vector<JobStatus> status;
   for (int i = 0; i < K; ++i) {
     planned.push_back(static_cast<long long>(shard_targets(targets, i, K).size()));
-    status.push_back(job_status(jobs[static_cast<std::size_t>(i)], p, *settings));
+    status.push_back(job_status(jobs[static_cast<std::size_t>(i)], p, settings));
   }
   print_jobs(planned, status, "campaign", "probes", "probe",
              "`unjam merge " + dir + " --out " + out.string() + "` writes the campaign's outputs");
@@ -262,22 +267,10 @@ bool print_bounds_status(const std::string& dir, const std::string& out_dir) {
   }
   const Packing p = read_packing(dir);
   const int K = static_cast<int>(jobs.size());
-  // The run's tolerances and method: those of the first job that has a readable file.
-  std::optional<BoundsRecord> record;
-  std::string record_error;
-  for (const JobFiles& f : jobs) {
-    if (!f.finished && !f.checkpoint) continue;
-    try {
-      record = bounds_record(f);
-      break;
-    } catch (const std::exception& e) {
-      record_error = e.what();
-    }
-  }
-  if (!record) throw Error("no readable force bounds file in " + out.string() + " (" + record_error + ")");
-  const int contacts = admissible_system(p, record->gap_tol, record->fn_tol).num_contacts();
+  const BoundsRecord record = first_readable<BoundsRecord>(jobs, bounds_record, "force bounds file in " + out.string());
+  const int contacts = admissible_system(p, record.gap_tol, record.fn_tol).num_contacts();
   std::printf("force bounds of %s in %s: %d contacts, %d LP values (method %s)%s\n", dir.c_str(), out.c_str(),
-              contacts, 2 * contacts, record->method.c_str(),
+              contacts, 2 * contacts, record.method.c_str(),
               K > 1 ? (", " + std::to_string(K) + " shards").c_str() : "");
   const std::string fingerprint = packing_fingerprint(p);
   std::vector<long long> planned;
@@ -287,7 +280,7 @@ bool print_bounds_status(const std::string& dir, const std::string& out_dir) {
     const long long share = contacts > i ? (contacts - i + K - 1) / K : 0;
     planned.push_back(2 * share);
     const std::string shard = K > 1 ? std::to_string(i) + "/" + std::to_string(K) : "";
-    status.push_back(bounds_job_status(jobs[static_cast<std::size_t>(i)], fingerprint, *record, shard, contacts));
+    status.push_back(bounds_job_status(jobs[static_cast<std::size_t>(i)], fingerprint, record, shard, contacts));
   }
   print_jobs(planned, status, "run", "LP values", "LP value",
              "`unjam merge " + dir + " --out " + out.string() + "` writes bounds.csv and bounds.json");
