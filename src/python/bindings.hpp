@@ -25,8 +25,8 @@ void bind_packing(py::module_& m);
 void bind_compute(py::module_& m);
 void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute (its default)
 // The cd method's settings from the values of unjam.probe's cd_* keywords, the other fields at
-// their defaults (settle_compliance and lost_factor are set through cd=unjam.CdSettings only),
-// unchecked: validate(CdPathSettings) checks them.
+// their defaults (settle_compliance, lost_factor and restart_floor are set through
+// cd=unjam.CdSettings only), unchecked: validate(CdPathSettings) checks them.
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
                            int interior_states_retries, int interior_iterations, double interior_neighbourhood);
