@@ -17,6 +17,7 @@
 #include "unjam/core/campaign_time.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/json_integer.hpp"
+#include "unjam/core/work_source.hpp"
 #include "unjam/packing/packing_io.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 
@@ -216,10 +217,14 @@ struct BoundsRecord {
   bool operator==(const BoundsRecord&) const = default;
 };
 
-BoundsRecord bounds_record(const JobFiles& f) {
-  const nlohmann::json j = read_object(f.finished ? *f.finished : *f.checkpoint);
-  const nlohmann::json& r = j.at(f.finished ? "options" : "settings");
+// From the parsed file `j`: a finished shard's "options" or a checkpoint's "settings".
+BoundsRecord bounds_record(const nlohmann::json& j, bool finished) {
+  const nlohmann::json& r = j.at(finished ? "options" : "settings");
   return {r.at("gap_tol").get<double>(), r.at("fn_tol").get<double>(), r.at("method").get<std::string>()};
+}
+
+BoundsRecord job_bounds_record(const JobFiles& f) {
+  return bounds_record(read_object(f.finished ? *f.finished : *f.checkpoint), f.finished.has_value());
 }
 
 // Where one job of the force bounds stands, in LP values (fn_min and fn_max of each contact).
@@ -231,14 +236,15 @@ JobStatus bounds_job_status(const JobFiles& f, const std::string& fingerprint, c
   try {
     if (f.finished) {
       const nlohmann::json j = read_object(*f.finished);
-      if (!(bounds_record(f) == record)) throw Error("other settings than the first job's");
+      if (!(bounds_record(j, true) == record)) throw Error("other settings than the first job's");
       st.done = 2 * static_cast<long long>(json_integers<int>(j.at("contacts"), "contacts").size());
       st.runs = campaign_time_from_json(j.value("all_runs", nlohmann::json()), st.done);
       st.kind = JobStatus::Kind::kFinished;
     } else if (f.checkpoint) {
-      const nlohmann::json settings = read_object(*f.checkpoint).at("settings");
+      const nlohmann::json j = read_object(*f.checkpoint);
+      const nlohmann::json& settings = j.at("settings");
       if (settings.value("packing_fingerprint", "") != fingerprint) throw Error("saved from another packing");
-      if (!(bounds_record(f) == record)) throw Error("other settings than the first job's");
+      if (!(bounds_record(j, false) == record)) throw Error("other settings than the first job's");
       if (settings.value("shard", "?") != shard)
         throw Error("saved by shard " + settings.value("shard", std::string("?")) + ", not " + shard);
       if (settings.value("contacts", -1) != contacts)
@@ -267,7 +273,7 @@ bool print_bounds_status(const std::string& dir, const std::string& out_dir) {
   }
   const Packing p = read_packing(dir);
   const int K = static_cast<int>(jobs.size());
-  const BoundsRecord record = first_readable<BoundsRecord>(jobs, bounds_record, "force bounds file in " + out.string());
+  const BoundsRecord record = first_readable<BoundsRecord>(jobs, job_bounds_record, "force bounds file in " + out.string());
   const int contacts = admissible_system(p, record.gap_tol, record.fn_tol).num_contacts();
   std::printf("force bounds of %s in %s: %d contacts, %d LP values (method %s)%s\n", dir.c_str(), out.c_str(),
               contacts, 2 * contacts, record.method.c_str(),
@@ -276,8 +282,9 @@ bool print_bounds_status(const std::string& dir, const std::string& out_dir) {
   std::vector<long long> planned;
   std::vector<JobStatus> status;
   for (int i = 0; i < K; ++i) {
-    // shard i/K: the contacts k with k mod K = i (a contact's place is its number)
-    const long long share = contacts > i ? (contacts - i + K - 1) / K : 0;
+    // shard i/K: the contacts in_shard of it (core/work_source; a contact's place is its number)
+    long long share = 0;
+    for (int k = 0; k < contacts; ++k) share += in_shard(k, i, K);
     planned.push_back(2 * share);
     const std::string shard = K > 1 ? std::to_string(i) + "/" + std::to_string(K) : "";
     status.push_back(bounds_job_status(jobs[static_cast<std::size_t>(i)], fingerprint, record, shard, contacts));
