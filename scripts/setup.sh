@@ -8,7 +8,7 @@ packages=(
   libopenmpi-dev openmpi-bin
   clang libclang-rt-dev libomp-dev
   python3 python3-matplotlib python3-numpy
-  python3-siconos
+  python3-siconos lammps
   python3-dev pybind11-dev python3-pybind11 python3-pytest python3-vtk9 xvfb xauth
 )
 missing=()
