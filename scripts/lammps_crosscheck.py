@@ -27,7 +27,8 @@ own pressure (virial; A the cell's area), and compared with the packing's:
             excess outside its interval, in F0, and the contacts loaded in LAMMPS that the
             bounds do not list
   balance   the net force and torque / radius of every grain summed from the contact forces
-            read back (checks the reading of LAMMPS' pair output: its signs and its pairs)
+            read back, by `unjam info` on LAMMPS' state (checks the reading of LAMMPS' pair
+            output: its signs and its pairs)
 
 Several strains (--strain 1e-4 1e-5 1e-6) run one after the other, each in OUT/strain-E, so
 that the approach to the rigid limit can be read off the table.
@@ -134,7 +135,8 @@ def pair_key(a, b):
     return (a, b) if a < b else (b, a)
 
 
-def lammps_version(lmp):
+def lammps_executable(lmp):
+    """The LAMMPS executable's path and its version line."""
     exe = shutil.which(lmp)
     if exe is None:
         raise up.UserError(f"'{lmp}' not found: install Debian's lammps (scripts/setup.sh) "
@@ -142,29 +144,28 @@ def lammps_version(lmp):
     r = subprocess.run([exe, "-h"], capture_output=True, text=True)
     for line in r.stdout.splitlines():
         if line.startswith("Large-scale Atomic/Molecular"):
-            return "LAMMPS" + line.split("Simulator", 1)[1].replace(" - ", " ", 1)
-    return "unknown"
+            return exe, "LAMMPS" + line.split("Simulator", 1)[1].replace(" - ", " ", 1)
+    return exe, "unknown"
 
 
-def model(meta, particles, strain):
+def model(particles, F0, strain):
     """kn, kt, gamman, gammat, viscous drag and dt of the soft model at this strain."""
     R = particles["radius"]
-    F0 = up.force_unit(meta, R)
     m = math.pi * R ** 2  # mass of a disk of unit area density (LAMMPS' density/disc)
     kn = F0 / (strain * 2.0 * float(np.mean(R)))
     gamman = 2.0 * DAMPING * math.sqrt(kn / (0.5 * float(np.mean(m))))
     return {"kn": kn, "kt": 2.0 / 7.0 * kn, "gamman": gamman, "gammat": 0.5 * gamman,
             "viscous": VISCOUS * math.sqrt(kn * float(np.mean(m))),
-            "dt": DT_FACTOR * math.sqrt(float(np.min(m)) / kn), "F0": F0}
+            "dt": DT_FACTOR * math.sqrt(float(np.min(m)) / kn)}
 
 
-def relaxation_floor(meta, p, m_max):
+def relaxation_floor(meta, p, m_max, F0):
     """The smallest damping force, in F0, that the relaxation can tell from rest: a grain
     slower than half a unit in the last place of a coordinate (up to L) per time step does
     not move in floating point, and its drag and contact damping at that speed stay. Below
     it a creeping grain passes for static while its contacts are out of balance."""
     ulp = math.ulp(max(meta["Lx"], meta["Ly"]))
-    return (p["viscous"] + p["gamman"] * m_max) * 0.5 * ulp / p["dt"] / p["F0"]
+    return (p["viscous"] + p["gamman"] * m_max) * 0.5 * ulp / p["dt"] / F0
 
 
 def data_file(meta, particles, strain):
@@ -298,26 +299,26 @@ def lammps_network(workdir, Lx, Ly):
     return net, g
 
 
-def balance(net, g, n):
-    """Largest net force and torque / radius on a grain, summed from the network."""
-    F = np.zeros((n, 2))
-    T = np.zeros(n)
-    r = g[:, 3]
-    for (a, b), (fn, ft, dist, nx, ny) in net.items():
-        f = np.array([fn * nx - ft * ny, fn * ny + ft * nx])  # on b
-        F[b] += f
-        F[a] -= f
-        # torque about each centre of the force at the contact point (on b: at -r_b n)
-        T[b] += r[b] * ft
-        T[a] += r[a] * ft
-    return float(np.max(np.hypot(F[:, 0], F[:, 1]))), float(np.max(np.abs(T) / r))
+def interval_excess(fn, bounds, F0):
+    """How far the forces fn ({pair: fn}) lie outside the intervals bounds ({pair: (fn_min,
+    fn_max)}), in F0, and the pairs of fn that bounds does not list. A pair of bounds absent
+    from fn carries no force, which its interval must allow (fn_min <= 0)."""
+    excess, unlisted = 0.0, []
+    for k, f in fn.items():
+        if k not in bounds:
+            unlisted.append(list(k))
+            continue
+        lo, hi = bounds[k]
+        excess = max(excess, (lo - f) / F0, (f - hi) / F0)
+    for k, (lo, _) in bounds.items():
+        if k not in fn:
+            excess = max(excess, lo / F0)
+    return excess, unlisted
 
 
-def compare(meta, particles, contacts, bounds, net, g, strain, run):
-    Lx, Ly = meta["Lx"], meta["Ly"]
-    s = 1.0 - strain
-    area = Lx * Ly * s * s
-    F0 = up.force_unit(meta, particles["radius"])
+def compare(meta, contacts, bounds, net, cell, F0, strain, run):
+    """LAMMPS' network, scaled to P_ext, against the packing's and its intervals."""
+    area = cell[0] * cell[1]
     P_L = sum(fn * dist for fn, _, dist, _, _ in net.values()) / (2.0 * area)
     scale = meta["P_ext"] / P_L
     carrying = up.force_carrying(contacts["fn"], F0)
@@ -335,7 +336,6 @@ def compare(meta, particles, contacts, bounds, net, g, strain, run):
     keys = sorted(set(ours) | set(theirs))
     dfn = max(abs(theirs.get(k, (0, 0))[0] - ours.get(k, (0, 0))[0]) for k in keys) / F0
     dft = max(abs(theirs.get(k, (0, 0))[1] - ours.get(k, (0, 0))[1]) for k in keys) / F0
-    fmax, tmax = balance(net, g, len(particles["radius"]))
     rows = []
     for k in keys:
         lo, hi = bounds.get(k, (math.nan, math.nan)) if bounds else (math.nan, math.nan)
@@ -347,22 +347,11 @@ def compare(meta, particles, contacts, bounds, net, g, strain, run):
               "contacts_packing": len(ours), "extra": [list(k) for k in extra],
               "missing": [list(k) for k in missing], "P_lammps": P_L,
               "max_dfn_F0": dfn, "max_dft_F0": dft,
-              "balance_force_F0": fmax * scale / F0, "balance_torque_F0": tmax * scale / F0,
               "coulomb_excess_F0": max(
                   [(abs(t) - meta["mu"] * f) / F0 for f, t in theirs.values()] + [0.0])}
     if bounds is not None:
-        excess, unlisted = 0.0, []
-        for k, (fl, _) in theirs.items():
-            if k not in bounds:
-                unlisted.append(list(k))
-                continue
-            lo, hi = bounds[k]
-            excess = max(excess, (lo - fl) / F0, (fl - hi) / F0)
-        for k, (lo, hi) in bounds.items():
-            if k not in theirs:
-                excess = max(excess, lo / F0)  # fn_L = 0 must be admissible
-        result["bounds_excess_F0"] = excess
-        result["bounds_unlisted"] = unlisted
+        result["bounds_excess_F0"], result["bounds_unlisted"] = interval_excess(
+            {k: v[0] for k, v in theirs.items()}, bounds, F0)
     return result, rows
 
 
@@ -378,12 +367,11 @@ def unjam_tool(given):
                        "--unjam PATH or set UNJAM")
 
 
-def write_lammps_packing(directory, meta, g, net, scale, strain):
+def write_lammps_packing(directory, meta, cell, g, net, scale):
     """LAMMPS' relaxed state as a packing (docs/packing-format.md, "Reading packings written
     by other programs"): its cell, grains and loaded contacts, forces scaled to P_ext."""
     os.makedirs(directory, exist_ok=True)
-    Lx, Ly = meta["Lx"] * (1 - strain), meta["Ly"] * (1 - strain)
-    record = {"Lx": Lx, "Ly": Ly, "P_ext": meta["P_ext"], "mu": meta["mu"],
+    record = {"Lx": cell[0], "Ly": cell[1], "P_ext": meta["P_ext"], "mu": meta["mu"],
               "state": {"time": 0.0, "step": 0, "lambda": 0.0, "static": True},
               "command": "scripts/lammps_crosscheck.py (LAMMPS' relaxed state)"}
     up.write_file_atomic(os.path.join(directory, "meta.json"),
@@ -410,7 +398,9 @@ def unjam_checks(tool, directory, fn_lammps, F0, own_bounds):
                                f"{r.stderr.strip()}")
         return r.stdout
     info = json.loads(run(["info", "--json", directory]))
-    checks = {"unjam_info": {k: info[k] for k in (
+    checks = {"balance_force_F0": info["max_force_residual_over_F0"],
+              "balance_torque_F0": info["max_torque_residual_over_F0R"],
+              "unjam_info": {k: info[k] for k in (
         "max_force_residual_over_F0", "max_torque_residual_over_F0R", "P_in_over_P_ext",
         "max_coulomb_violation_over_F0", "max_tension_over_F0",
         "geometry_worst_over_tolerance", "contacts_force_carrying")}}
@@ -419,13 +409,7 @@ def unjam_checks(tool, directory, fn_lammps, F0, own_bounds):
     bounds_csv = os.path.join(directory, "bounds.csv")
     run(["bounds", directory, "--out", bounds_csv, "--threads", "1"])
     own = read_bounds(bounds_csv, info["N"])
-    excess, unlisted = 0.0, []
-    for k, fl in fn_lammps.items():
-        if k not in own:
-            unlisted.append(list(k))
-            continue
-        lo, hi = own[k]
-        excess = max(excess, (lo - fl) / F0, (fl - hi) / F0)
+    excess, unlisted = interval_excess(fn_lammps, own, F0)
     checks.update({"own_bounds_excess_F0": excess, "own_bounds_unlisted": unlisted,
                    "own_bounds_contacts": len(own)})
     return own, checks
@@ -493,17 +477,17 @@ def main():
     meta, particles, contacts = read_packing(args.packing)
     n = len(particles["radius"])
     bounds = read_bounds(args.bounds, n) if args.bounds else None
-    exe = shutil.which(args.lmp)
-    version = lammps_version(args.lmp)
+    exe, version = lammps_executable(args.lmp)
     tool = unjam_tool(args.unjam)
     out = args.out or os.path.join(args.packing, "lammps-crosscheck")
     os.makedirs(out, exist_ok=True)
     F0 = up.force_unit(meta, particles["radius"])
+    m_max = math.pi * float(np.max(particles["radius"])) ** 2
     results, rows_by_strain, owns = [], [], []
     for e in args.strain:
-        p = model(meta, particles, e)
-        m_max = math.pi * float(np.max(particles["radius"])) ** 2
-        floor = relaxation_floor(meta, p, m_max)
+        p = model(particles, F0, e)
+        cell = (meta["Lx"] * (1.0 - e), meta["Ly"] * (1.0 - e))
+        floor = relaxation_floor(meta, p, m_max, F0)
         tol = args.tol if args.tol is not None else max(1e-9, 4.0 * floor)
         if tol < floor:
             up.warn(f"strain {e:g}: --tol {tol:g} F0 is below the floor set by the positions' "
@@ -512,17 +496,17 @@ def main():
         os.makedirs(work, exist_ok=True)
         run = run_lammps(exe, work, {
             "data.lammps": data_file(meta, particles, e),
-            "in.lammps": input_file(meta["mu"], p, tol * p["F0"], args.max_steps, m_max)})
+            "in.lammps": input_file(meta["mu"], p, tol * F0, args.max_steps, m_max)})
         if not run["relaxed"]:
             raise LammpsFailed(f"strain {e:g}: not relaxed after {run['steps']} steps "
                                f"(largest force {run['fmax'] / F0:.3g} F0; "
                                f"{os.path.join(work, 'log.lammps')})")
-        net, g = lammps_network(work, meta["Lx"] * (1 - e), meta["Ly"] * (1 - e))
-        res, rows = compare(meta, particles, contacts, bounds, net, g, e, run)
-        res["model"] = {k: v for k, v in p.items() if k != "F0"}
+        net, g = lammps_network(work, *cell)
+        res, rows = compare(meta, contacts, bounds, net, cell, F0, e, run)
+        res["model"] = p
         res["tol_F0"], res["round_off_floor_F0"] = tol, floor
-        fn_lammps = write_lammps_packing(os.path.join(work, "packing"), meta, g, net,
-                                         meta["P_ext"] / res["P_lammps"], e)
+        fn_lammps = write_lammps_packing(os.path.join(work, "packing"), meta, cell, g, net,
+                                         meta["P_ext"] / res["P_lammps"])
         own, checks = unjam_checks(tool, os.path.join(work, "packing"), fn_lammps, F0,
                                    not args.no_own_bounds)
         res.update(checks)

@@ -31,17 +31,25 @@ class LammpsCrossCheck(unittest.TestCase):
             raise RuntimeError("LAMMPS (Debian's lammps, `lmp`) is not installed: "
                                "run scripts/setup.sh")
         cls.tmp = tempfile.TemporaryDirectory()
+        # p50-mu0.1 at a strain of 1e-6 against HiGHS' reference intervals: shared by the
+        # tests of the frictional network and of a narrowed interval
+        cls.p50 = os.path.join(FIXTURES, "p50-mu0.1")
+        cls.p50_out = os.path.join(cls.tmp.name, "mu0.1")
+        cls.p50_run = crosscheck(cls.p50, cls.p50_out, "--strain", "1e-6", "--bounds",
+                                 os.path.join(cls.p50, "bounds-reference.csv"))
 
     @classmethod
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
-    def run_ok(self, packing, name, *args):
-        out = os.path.join(self.tmp.name, name)
-        r = crosscheck(packing, out, *args)
+    def assert_ran(self, r, out):
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertTrue(os.path.getsize(os.path.join(out, "crosscheck.png")) > 0)
         return results(out)
+
+    def run_ok(self, packing, name, *args):
+        out = os.path.join(self.tmp.name, name)
+        return self.assert_ran(crosscheck(packing, out, *args), out)
 
     def test_frictionless_isostatic_network_is_the_rigid_limit_of_the_soft_one(self):
         # One force network at mu = 0 (isostatic): LAMMPS' approaches the packing's as the
@@ -65,9 +73,7 @@ class LammpsCrossCheck(unittest.TestCase):
         # p50-mu0.1: at a strain of 1e-6 LAMMPS loads exactly the packing's contacts, so its
         # network is one of the packing's admissible networks: inside the intervals of an
         # independent LP (HiGHS, bounds-reference.csv) and of unjam's LP of its own state.
-        fixture = os.path.join(FIXTURES, "p50-mu0.1")
-        (res,) = self.run_ok(fixture, "mu0.1", "--strain", "1e-6", "--bounds",
-                             os.path.join(fixture, "bounds-reference.csv"))
+        (res,) = self.assert_ran(self.p50_run, self.p50_out)
         self.assertEqual(res["extra"], [])
         self.assertEqual(res["bounds_unlisted"], [])
         self.assertLess(res["bounds_excess_F0"], 1e-6)
@@ -95,10 +101,8 @@ class LammpsCrossCheck(unittest.TestCase):
 
     def test_an_interval_that_excludes_the_network_is_reported(self):
         # The check can fail: an interval narrowed below LAMMPS' force is found outside.
-        fixture = os.path.join(FIXTURES, "p50-mu0.1")
-        (res,) = self.run_ok(fixture, "narrow-ref", "--strain", "1e-6", "--bounds",
-                             os.path.join(fixture, "bounds-reference.csv"))
-        with open(os.path.join(self.tmp.name, "narrow-ref", "strain-1e-06", "forces.csv")) as f:
+        self.assert_ran(self.p50_run, self.p50_out)
+        with open(os.path.join(self.p50_out, "strain-1e-06", "forces.csv")) as f:
             lines = f.read().splitlines()
         head = lines[0].split(",")
         rows = [dict(zip(head, ln.split(","))) for ln in lines[1:]]
@@ -113,7 +117,7 @@ class LammpsCrossCheck(unittest.TestCase):
                 if r is top:
                     hi = 0.5 * float(r["fn_lammps"])
                 f.write(f"{r['a']},{r['b']},{min(float(r['fn_min']), hi)!r},{hi!r}\n")
-        (bad,) = self.run_ok(fixture, "narrow", "--strain", "1e-6", "--bounds", narrowed)
+        (bad,) = self.run_ok(self.p50, "narrow", "--strain", "1e-6", "--bounds", narrowed)
         with open(os.path.join(self.tmp.name, "narrow", "crosscheck.json")) as f:
             F0 = json.load(f)["packing"]["F0"]
         self.assertAlmostEqual(bad["bounds_excess_F0"], 0.5 * float(top["fn_lammps"]) / F0,
