@@ -410,6 +410,40 @@ TEST_F(CliProbe, TheSummaryCountsTheTimeOfEveryRunThatMadeTheCampaign) {
   }
 }
 
+TEST_F(CliProbe, EachProbesCpuIsWrittenBesideTheResultsAndSurvivesResumesAndShards) {
+  // probe_cpu.csv: one row per probe, the contacts of probes.csv, through a stop and a resume
+  // (the checkpoint keeps the first run's probes' CPU) and through shards merged; --status and
+  // the summary give its median; probes.csv stays the bytes of one uninterrupted run.
+  const fs::path out = root_ / "campaign", whole = root_ / "whole", sharded = root_ / "sharded";
+  for (const fs::path& d : {out, whole, sharded}) fs::create_directories(d);
+  const std::string args = " --sample 6 --method cd --quiet --threads 1 --out ";
+  testing::ToolRun r = run_tool("probe " + q(dir_) + args + q(out) + " --stop-after 2");
+  ASSERT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_EQ(read_json_file(out / "probe_checkpoint.json").at("probe_cpu").size(), 2u);
+  r = run_tool("merge " + q(dir_) + " --out " + q(out) + " --status");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("CPU per probe (2 of the 2 done record it): median "), std::string::npos) << r.output;
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(out)).exit_code, 0);
+  ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(whole)).exit_code, 0);
+  for (int i = 0; i < 2; ++i)
+    ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(sharded) + " --shard " + std::to_string(i) + "/2").exit_code, 0);
+  r = run_tool("merge " + q(dir_) + " --out " + q(sharded));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("CPU per probe: median "), std::string::npos) << r.output;
+  for (const fs::path& d : {out, whole, sharded}) {
+    EXPECT_EQ(read_file(d / "probes.csv"), read_file(whole / "probes.csv")) << d;
+    const CsvTable probes = CsvTable::read(d / "probes.csv"), cpu = CsvTable::read(d / "probe_cpu.csv");
+    ASSERT_EQ(cpu.rows(), 6u) << d;
+    for (std::size_t i = 0; i < cpu.rows(); ++i) {
+      EXPECT_EQ(cpu.integer(i, cpu.column("contact")), probes.integer(i, probes.column("contact"))) << d;
+      EXPECT_GE(cpu.number(i, cpu.column("cpu_seconds")), 0.0) << d;
+    }
+    const nlohmann::json c = read_json_file(d / "probe_summary.json").at("cpu_per_probe");
+    EXPECT_EQ(c.at("probes").get<int>(), 6) << d;
+    EXPECT_GE(c.at("max_seconds").get<double>(), c.at("median_seconds").get<double>()) << d;
+  }
+}
+
 TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   // A cd campaign stopped at dt = 1e-3 (exit 3) is not resumed at the default dt: the error
   // names the setting and both values, the checkpoint is kept, and the same command with

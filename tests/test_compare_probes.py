@@ -196,7 +196,7 @@ class ComparePairs(unittest.TestCase):
             self.assertEqual(float(row["alpha_cd"]), s_cd["alpha"])
             self.assertEqual(float(row["alpha_lp_err"]), s_lp["alpha_err"])
             self.assertClose(float(row["cpu_s_per_probe_cd"]),
-                             s_cd["all_runs"]["busy_seconds"] / s_cd["probes"])
+                             s_cd["cpu_per_probe"]["total_seconds"] / s_cd["cpu_per_probe"]["probes"])
             self.assertEqual(float(row["mu"]), s_cd["mu"])
             self.assertEqual((int(row["N"]), int(row["seed"])), (s_cd["N"], s_cd["seed"]))
 
@@ -370,16 +370,25 @@ class ComparePairs(unittest.TestCase):
         # A resumed campaign: all_runs (every run's busy seconds) gives the CPU column, over the
         # probes whose runs recorded their time; a summary without it falls back to its last
         # run's ranks over all its probes.
+        # Each probe's own CPU (cpu_per_probe), where the summary records it, comes first.
+        def measured(s):
+            s["cpu_per_probe"] = {"probes": 8, "total_seconds": 4.0}
+            s["all_runs"] = {"runs": 3, "wall_seconds": 100.0, "busy_seconds": 90.0,
+                             "untimed": 2}
+
         def resumed(s):
+            del s["cpu_per_probe"]
             s["all_runs"] = {"runs": 3, "wall_seconds": 100.0, "busy_seconds": 90.0,
                              "untimed": 2}
             s["ranks"] = [{"rank": 0, "threads": 1, "probes": 4, "busy_seconds": 7.0}]
 
         def older(s):
+            del s["cpu_per_probe"]
             del s["all_runs"]
             s["ranks"] = [{"rank": 0, "threads": 1, "probes": 12, "busy_seconds": 6.0}]
 
-        for name, edit, cpu in (("cd-resumed", resumed, 90.0 / 10), ("cd-older", older, 6.0 / 12)):
+        for name, edit, cpu in (("cd-measured", measured, 4.0 / 8), ("cd-resumed", resumed, 90.0 / 10),
+                                ("cd-older", older, 6.0 / 12)):
             cd = copy_campaign(R["cd"]["p50-mu1"], name, edit_summary=edit)
             out = os.path.join(R["tmp"], "compare-" + name)
             p = run(cd, R["lp"]["p50-mu1"], "--out", out)

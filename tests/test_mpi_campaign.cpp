@@ -57,6 +57,7 @@ std::string summary_of_results(const fs::path& dir) {
   j.erase("wall_seconds");
   j.erase("ranks");
   j.erase("all_runs");
+  j.erase("cpu_per_probe");  // measurements, like the times above
   j.erase("command");
   return j.dump(2);
 }

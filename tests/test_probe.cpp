@@ -705,6 +705,79 @@ TEST(ProbeCampaign, InertiaOfTheStepIsSummarisedAndSurvivesTheCheckpoint) {
   EXPECT_THROW(campaign_state_from_json(bad, p), Error);
 }
 
+// The CPU each probe took (ProbeRow::cpu_seconds): measured by every campaign, summarised by
+// probe_cpu over the rows that record it, kept by the checkpoint beside the time of the runs
+// and outside the hashed state, and read back without ever refusing a damaged record.
+TEST(ProbeCampaign, EachProbesCpuIsMeasuredSummarisedAndKeptOutsideTheState) {
+  const Packing& p = fixture_p50();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CampaignState st(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+  // contacts 0-5: exact, exact, near-exact, without a solution, exact (not measured), exact
+  const std::vector<double> cpu{0.5, 2.0, 8.0, 16.0, nan, 1.0};
+  for (int k = 0; k < 6; ++k) {
+    ProbeRow r{k, p.contacts[k].a, p.contacts[k].b, 1.0, 1.0, k != 2 && k != 3, 1, k == 3 ? kNoSolution : 0.0};
+    if (k == 2) r.residual = 1e-5;
+    r.cpu_seconds = cpu[k];
+    st.rows.push_back(r);
+  }
+  const ProbeCpu c = probe_cpu(st.rows);
+  EXPECT_EQ(c.timed, 5);
+  EXPECT_DOUBLE_EQ(c.total, 27.5);
+  EXPECT_DOUBLE_EQ(c.median, 2.0);  // of 0.5, 1, 2, 8, 16
+  EXPECT_DOUBLE_EQ(c.p90, 8.0 + 0.6 * 8.0);  // position 3.6 of 0..4
+  EXPECT_DOUBLE_EQ(c.max, 16.0);
+  EXPECT_EQ(c.max_contact, 3);
+  EXPECT_EQ(c.exact, 3);
+  EXPECT_DOUBLE_EQ(c.exact_median, 1.0);
+  EXPECT_EQ(c.near_exact, 1);
+  EXPECT_DOUBLE_EQ(c.near_exact_median, 8.0);
+  EXPECT_EQ(c.no_solution, 1);
+  const nlohmann::json j = to_json(c);
+  EXPECT_EQ(j.at("probes").get<int>(), 5);
+  EXPECT_EQ(j.at("max_contact").get<int>(), 3);
+  EXPECT_TRUE(to_json(probe_cpu({})).at("median_seconds").is_null());
+
+  // The checkpoint keeps it beside the runs' time; its hashed state does not depend on it.
+  CampaignState other = st;
+  for (ProbeRow& r : other.rows) r.cpu_seconds = 99.0;
+  EXPECT_EQ(to_json(st).dump(), to_json(other).dump());
+  const CampaignTime runs{1, 30.0, 27.5, 0};
+  const nlohmann::json settings = to_json(campaign_settings_for(p));
+  const std::string text = campaign_checkpoint_text("fp", settings, st, &runs);
+  EXPECT_EQ(nlohmann::json::parse(text).at("probe_cpu").size(), 5u);
+  EXPECT_FALSE(nlohmann::json::parse(campaign_checkpoint_text("fp", settings, st)).contains("probe_cpu"));
+  CampaignState back = campaign_state_from_json(to_json(st), p);
+  set_probe_cpu(back, nlohmann::json::parse(text).at("probe_cpu"));
+  for (int k = 0; k < 6; ++k) {
+    if (std::isnan(cpu[k])) EXPECT_TRUE(std::isnan(back.rows[k].cpu_seconds));
+    else EXPECT_EQ(back.rows[k].cpu_seconds, cpu[k]) << k;
+  }
+  // A damaged record loses only what it cannot give: never an error.
+  set_probe_cpu(back,
+                nlohmann::json::parse(R"([[0, 1.5], [1, -2], [2, "x"], [77, 3.0], [3], "y", [5.5, 1.0], [5, 4.0]])"));
+  EXPECT_EQ(back.rows[0].cpu_seconds, 1.5);
+  for (int k : {1, 2, 3, 4}) EXPECT_TRUE(std::isnan(back.rows[k].cpu_seconds)) << k;
+  EXPECT_EQ(back.rows[5].cpu_seconds, 4.0);
+  set_probe_cpu(back, nlohmann::json("not an array"));
+  EXPECT_EQ(probe_cpu(back.rows).timed, 0);
+
+  // A campaign measures every probe it runs: on its own thread, so one and two threads both
+  // record it, and the results stay the same bytes (ProbeCampaign.SameResultsWithOneAndTwoThreads).
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    CampaignSettings s = cd_sample(p, 6);
+    CampaignState run(ResponseGrid::for_cell(p.cell, 2.0 * p.mean_radius()));
+    ASSERT_TRUE(run_campaign(p, s, run));
+    ASSERT_EQ(run.rows.size(), 6u);
+    for (const ProbeRow& r : run.rows) EXPECT_GE(r.cpu_seconds, 0.0) << "contact " << r.contact;
+    EXPECT_GT(probe_cpu(run.rows).total, 0.0);
+    const std::vector<ProbeResult> listed = probe_contacts(p, s, {run.rows[0].contact});
+    ASSERT_EQ(listed.size(), 1u);
+    EXPECT_GE(listed[0].cpu_seconds, 0.0);
+  }
+  omp_set_num_threads(omp_get_num_procs());
+}
+
 // The contacts a step opens and sets sliding (ProbeRow::opened, sliding) in the summary: their
 // medians over the rows that have them (-1: lp, nlgs, no solution); in the checkpoint as two
 // integers after f_inertia, and a row of 11 values (a checkpoint written before them) resumes

@@ -144,6 +144,15 @@ def test_probe_reports_each_finished_probe(p50):
     assert len(one) == 1 and one[0]["result"].f_crit == r.f_crit and one[0]["total"] == 1
 
 
+def test_each_probe_says_how_much_cpu_it_took(p50):
+    # ProbeResult.cpu_seconds: measured on the probe's own thread by unjam.probe, whatever the
+    # thread count; a measurement, so it is not compared between runs, only checked to exist.
+    for threads in (1, 2):
+        results = unjam.probe(p50, contacts=[0, 3, 5], method="cd", threads=threads)
+        assert all(r.cpu_seconds >= 0.0 for r in results)
+        assert sum(r.cpu_seconds for r in results) > 0.0
+
+
 def test_a_long_probe_reports_that_it_is_running(p50):
     """running_every=0: a 'running' event at every poll of an nlgs probe (one per 16 sweeps),
     with its contact and its polls so far, then its 'finished' event."""

@@ -40,6 +40,7 @@ struct JobStatus {
   CampaignTime runs;
   double saved_ago_s = 0.0;  // the checkpoint's age
   std::string why;           // kUnreadable: the reason
+  std::vector<ProbeRow> rows;  // a probe job's rows (their cpu_seconds), empty for the force bounds
 };
 
 double age_seconds(const fs::path& file) {
@@ -66,7 +67,10 @@ JobStatus job_status(const JobFiles& f, const Packing& p, const nlohmann::json& 
     if (f.finished) {
       const nlohmann::json j = read_object(*f.finished);
       if (j.value("settings", nlohmann::json()) != settings) throw Error("other settings than the first job's");
-      st.done = static_cast<long long>(campaign_state_from_json(j.at("state"), p).rows.size());
+      CampaignState state = campaign_state_from_json(j.at("state"), p);
+      set_probe_cpu(state, j.value("probe_cpu", nlohmann::json()));
+      st.done = static_cast<long long>(state.rows.size());
+      st.rows = std::move(state.rows);
       st.runs = campaign_time_from_json(j.value("all_runs", nlohmann::json()), st.done);
       st.kind = JobStatus::Kind::kFinished;
     } else if (f.checkpoint) {
@@ -74,11 +78,12 @@ JobStatus job_status(const JobFiles& f, const Packing& p, const nlohmann::json& 
           read_campaign_checkpoint(read_file(*f.checkpoint), f.checkpoint->filename().string(), p, settings, &st.runs);
       if (!state) throw Error("saved from another packing");
       st.done = static_cast<long long>(state->rows.size());
+      st.rows = state->rows;
       st.saved_ago_s = age_seconds(*f.checkpoint);
       st.kind = JobStatus::Kind::kStarted;
     }
   } catch (const std::exception& e) {  // unjam::Error, nlohmann's exceptions
-    st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what()};
+    st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what(), {}};
   }
   return st;
 }
@@ -204,6 +209,12 @@ bool print_probe_status(const std::string& dir, const std::string& out_dir) {
   }
   print_jobs(planned, status, "campaign", "probes", "probe",
              "`unjam merge " + dir + " --out " + out.string() + "` writes the campaign's outputs");
+  std::vector<ProbeRow> rows;
+  for (const JobStatus& st : status) rows.insert(rows.end(), st.rows.begin(), st.rows.end());
+  if (const ProbeCpu cpu = probe_cpu(rows); cpu.timed > 0)
+    std::printf("  CPU per probe (%d of the %lld done record it): median %s, 90 %% below %s, largest %s (contact %d)\n",
+                cpu.timed, static_cast<long long>(rows.size()), format_seconds(cpu.median).c_str(),
+                format_seconds(cpu.p90).c_str(), format_seconds(cpu.max).c_str(), cpu.max_contact);
   return true;
 }
 
@@ -256,7 +267,7 @@ JobStatus bounds_job_status(const JobFiles& f, const std::string& fingerprint, c
       st.kind = JobStatus::Kind::kStarted;
     }
   } catch (const std::exception& e) {  // unjam::Error, nlohmann's exceptions
-    st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what()};
+    st = {JobStatus::Kind::kUnreadable, 0, {}, 0.0, e.what(), {}};
   }
   return st;
 }

@@ -109,6 +109,19 @@ std::string rows_csv(const CampaignState& state, const std::string& method) {
   return w.str();
 }
 
+// probe_cpu.csv: the CPU each probe took (ProbeRow::cpu_seconds), one row per probe that
+// records it, in contact order. A measurement, not a result: unlike probes.csv, its bytes differ
+// from run to run.
+std::string probe_cpu_csv(const CampaignState& state) {
+  CsvWriter w({"contact", "cpu_seconds"});
+  for (const ProbeRow& r : state.rows) {
+    if (!(r.cpu_seconds >= 0.0)) continue;
+    w.cell(r.contact).cell(r.cpu_seconds);
+    w.end_row();
+  }
+  return w.str();
+}
+
 // The exact step also writes its contact forces, displacements and states
 // (probe-K-forces.csv), so that the solution can be checked by anyone, and says which
 // contacts it changes (`changes`, where it has forces).
@@ -466,7 +479,7 @@ void write_shard(const ProbeOptions& o, const std::string& fingerprint, const nl
                             {"options", {{"fit_window", o.fit_window}}},  // the summary's; the rest is in settings
                             {"shard", o.shard}, {"command", command_line()}, {"program_version", kVersion},
                             {"wall_seconds", time.wall}, {"ranks", rank_loads_json<nlohmann::json>(time.loads, "probes")},
-                            {"all_runs", to_json(time.all_runs)}};
+                            {"all_runs", to_json(time.all_runs)}, {"probe_cpu", probe_cpu_json(state)}};
   write_file_atomic(file, j.dump());
   std::printf("shard %s: %zu probes of %s in %s -> %s (merge the shards with `unjam merge`)\n",
               o.shard.c_str(), state.rows.size(), o.dir.c_str(), format_duration(time.wall).c_str(),
@@ -484,7 +497,8 @@ double accepted_residual(const CampaignSettings& s) {
 // the steps, the fit of d(r) and the time of its runs.
 void print_campaign_report(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
                            const CampaignSummary& sum, const PackingStats& stats, const OverBudget& over_budget,
-                           int accepted, const RunTime& time, const fs::path& out, int planned) {
+                           int accepted, const CampaignState& state, const RunTime& time, const fs::path& out,
+                           int planned) {
   const char* method = method_name(s.method);
   if (planned > 0)
     std::printf("%d of %d probes of %s (method %s) so far, from the campaign's checkpoint -> %s (partial)\n",
@@ -551,6 +565,18 @@ void print_campaign_report(const ProbeOptions& o, const Packing& p, const Campai
       std::printf("; %lld probes from a checkpoint that did not record its time", all.untimed);
     std::printf("\n");
   }
+  if (const ProbeCpu cpu = probe_cpu(state.rows); cpu.timed > 0) {
+    std::printf("  CPU per probe: median %s, 90 %% below %s, largest %s (contact %d)",
+                format_seconds(cpu.median).c_str(), format_seconds(cpu.p90).c_str(), format_seconds(cpu.max).c_str(),
+                cpu.max_contact);
+    if (cpu.exact > 0 && cpu.exact < cpu.timed)
+      std::printf("; exact %s, near-exact %s, without a solution %s (medians)",
+                  format_seconds(cpu.exact_median).c_str(),
+                  cpu.near_exact > 0 ? format_seconds(cpu.near_exact_median).c_str() : "-",
+                  cpu.no_solution > 0 ? format_seconds(cpu.no_solution_median).c_str() : "-");
+    if (cpu.timed < sum.probes) std::printf("; over the %d probes that record it", cpu.timed);
+    std::printf("\n");
+  }
   if (time.loads.size() > 1)
     for (const RankLoad& l : time.loads)
       std::printf("  rank %d: %lld probes, %s busy (%d threads)\n", l.rank, l.tasks,
@@ -567,6 +593,7 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const CampaignSett
   write_file_atomic(out / "probes.csv", rows_csv(state, method_name(s.method)));
   write_file_atomic(out / "response_field.csv", state.average.field_csv());
   write_file_atomic(out / "response_profile.csv", state.average.profile_csv());
+  write_file_atomic(out / "probe_cpu.csv", probe_cpu_csv(state));
   nlohmann::json summary = campaign_summary_json(p, stats, sum);
   // cd with a budget: the probes it stopped, whose sweeps (pieces of all paths) exceed it by
   // the one not taken.
@@ -587,9 +614,10 @@ void finish_campaign(const ProbeOptions& o, const Packing& p, const CampaignSett
   summary["wall_seconds"] = planned > 0 ? nlohmann::json(nullptr) : nlohmann::json(time.wall);
   summary["ranks"] = rank_loads_json<nlohmann::json>(time.loads, "probes");
   summary["all_runs"] = to_json(time.all_runs);
+  summary["cpu_per_probe"] = to_json(probe_cpu(state.rows));
   if (planned > 0) summary["partial"] = {{"probes_done", sum.probes}, {"probes_planned", planned}};
   write_file_atomic(out / "probe_summary.json", summary.dump(2));
-  print_campaign_report(o, p, s, sum, stats, over_budget, accepted, time, out, planned);
+  print_campaign_report(o, p, s, sum, stats, over_budget, accepted, state, time, out, planned);
 }
 
 void run(const ProbeOptions& o) {
@@ -645,7 +673,8 @@ bool merge_probe_shards(const std::string& dir, const std::string& out_dir) {
         j.value("options", nlohmann::json()) != first.json.at("options"))
       throw Error("the shards in " + out.string() + " come from runs with other settings");
     read_shard(shard, [&] {
-      const CampaignState part = campaign_state_from_json(j.at("state"), p);
+      CampaignState part = campaign_state_from_json(j.at("state"), p);
+      set_probe_cpu(part, j.value("probe_cpu", nlohmann::json()));
       std::vector<int> contacts;
       for (const ProbeRow& r : part.rows) contacts.push_back(r.contact);
       claim_shard_contacts(shard, contacts, targets, whole, seen);

@@ -100,4 +100,11 @@ std::string format_duration(double s) {
   return buf;
 }
 
+std::string format_seconds(double s) {
+  if (!std::isfinite(s) || s < 0 || s >= 60) return format_duration(s);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g s", s);
+  return buf;
+}
+
 }  // namespace unjam::cli

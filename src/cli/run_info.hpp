@@ -19,6 +19,9 @@ std::string format_bytes(double bytes);
 
 // "42.0 s", "3 min 05 s", "2 h 10 min".
 std::string format_duration(double seconds);
+// A short time (CPU per probe, for instance) to three significant digits below a minute
+// ("0.0123 s", "4.56 s"), as format_duration beyond.
+std::string format_seconds(double seconds);
 
 // Called first in main: SIGINT and SIGTERM are blocked in the main thread and in every
 // thread made from it (OpenMP's, MPI's) and taken by one listening thread, so that no handler

@@ -466,6 +466,9 @@ void bind_probe_result(py::module_& m) {
       .def_readonly("sliding", &ProbeResult::sliding,
                     "lemke, cd: contacts loaded in the packing (the probed one aside) that the step sets sliding "
                     "(|u_t| > 1e-6 g); -1 for lp, nlgs or a probe without a solution")
+      .def_readonly("cpu_seconds", &ProbeResult::cpu_seconds,
+                    "CPU time the probe took on its thread (s); a measurement that differs from run to run, "
+                    "never a result (docs/probe.md, \"Campaigns\")")
       .def_property_readonly("u", &u_view, "(N, 2) float64 read-only view: peculiar displacement (R_max)")
       .def_property_readonly("rot", [](py::object self) {
         const ProbeResult& r = self.cast<const ProbeResult&>();

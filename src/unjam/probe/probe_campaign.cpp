@@ -17,6 +17,7 @@
 #include "unjam/analysis/contact_frame.hpp"
 #include "unjam/core/atomic_file.hpp"
 #include "unjam/core/checkpoint_settings.hpp"
+#include "unjam/core/cpu_time.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/json_integer.hpp"
 #include "unjam/core/quantile.hpp"
@@ -38,7 +39,8 @@ double nullable_from(const nlohmann::json& j, const char* what) {
 
 ProbeRow row_of(const ProbeResult& r) {
   return {r.contact, r.a,        r.b,        r.f_cont,    r.f_crit,
-          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt, r.f_inertia, r.opened, r.sliding};
+          r.converged, r.sweeps, r.residual, r.violations, r.lambda_dt, r.f_inertia, r.opened, r.sliding,
+          r.cpu_seconds};
 }
 
 // One worker's probe engine: the LP-based probe keeps its model between probes.
@@ -79,6 +81,7 @@ std::string encode(const ProbeResult& r) {
   ByteWriter w;
   w.put(r.contact).put(r.a).put(r.b).put(r.f_cont).put(r.f_crit).put(r.g).put(r.lambda_dt);
   w.put(r.converged).put(r.sweeps).put(r.residual).put(r.violations).put(r.f_inertia).put(r.opened).put(r.sliding);
+  w.put(r.cpu_seconds);
   std::vector<double> u(2 * r.u.size());
   for (std::size_t i = 0; i < r.u.size(); ++i) u[2 * i] = r.u[i].x(), u[2 * i + 1] = r.u[i].y();
   w.put_array(u.data(), u.size());
@@ -103,6 +106,7 @@ ProbeResult decode(const std::string& bytes) {
   r.f_inertia = in.get<double>();
   r.opened = in.get<int>();
   r.sliding = in.get<int>();
+  r.cpu_seconds = in.get<double>();
   const std::vector<double> u = in.get_array<double>();
   for (std::size_t i = 0; i + 1 < u.size(); i += 2) r.u.emplace_back(u[i], u[i + 1]);
   r.u_rot = in.get_array<double>();
@@ -120,9 +124,12 @@ void probe_tasks(WorkSource& source, const Packing& p, const CampaignSettings& s
   work_off(source, omp_get_max_threads(), 1, [] { return Worker{}; }, [&](Worker& w, int t) {
     const int k = contacts ? (*contacts)[t] : t;
     try {
+      const double cpu0 = thread_cpu_seconds();  // one probe per thread: its CPU is this thread's
       // (a probe that does not poll has nothing to report, nor a copy of the settings to make)
-      if (running && probe_polls(s.method)) return encode(w.probe(p, with_running(s, k, running, running_every_s), k));
-      return encode(w.probe(p, s, k));
+      ProbeResult r = running && probe_polls(s.method) ? w.probe(p, with_running(s, k, running, running_every_s), k)
+                                                       : w.probe(p, s, k);
+      r.cpu_seconds = thread_cpu_seconds() - cpu0;
+      return encode(r);
     } catch (const Cancelled&) {
       throw;
     } catch (const std::exception& e) {
@@ -410,6 +417,69 @@ int probes_accepted(const CampaignState& state, double accept_residual) {
   return n;
 }
 
+ProbeCpu probe_cpu(const std::vector<ProbeRow>& rows) {
+  ProbeCpu c;
+  std::vector<double> all, exact, near, none;
+  for (const ProbeRow& r : rows) {
+    if (!(r.cpu_seconds >= 0.0)) continue;  // NaN: not measured
+    all.push_back(r.cpu_seconds);
+    c.total += r.cpu_seconds;
+    if (c.max_contact < 0 || r.cpu_seconds > c.max) {
+      c.max = r.cpu_seconds;
+      c.max_contact = r.contact;
+    }
+    (r.converged ? exact : r.residual == kNoSolution ? none : near).push_back(r.cpu_seconds);
+  }
+  c.timed = static_cast<int>(all.size());
+  c.exact = static_cast<int>(exact.size());
+  c.near_exact = static_cast<int>(near.size());
+  c.no_solution = static_cast<int>(none.size());
+  if (!all.empty()) {
+    c.median = quantile(all, 0.5);
+    c.p90 = quantile(std::move(all), 0.9);
+  }
+  if (!exact.empty()) c.exact_median = quantile(std::move(exact), 0.5);
+  if (!near.empty()) c.near_exact_median = quantile(std::move(near), 0.5);
+  if (!none.empty()) c.no_solution_median = quantile(std::move(none), 0.5);
+  return c;
+}
+
+nlohmann::json to_json(const ProbeCpu& c) {
+  // a statistic of no probes: null
+  const auto median = [](int n, double m) { return n > 0 ? nlohmann::json(m) : nlohmann::json(nullptr); };
+  return {{"probes", c.timed},
+          {"total_seconds", c.total},
+          {"median_seconds", median(c.timed, c.median)},
+          {"p90_seconds", median(c.timed, c.p90)},
+          {"max_seconds", median(c.timed, c.max)},
+          {"max_contact", c.max_contact},
+          {"exact", {{"probes", c.exact}, {"median_seconds", median(c.exact, c.exact_median)}}},
+          {"near_exact", {{"probes", c.near_exact}, {"median_seconds", median(c.near_exact, c.near_exact_median)}}},
+          {"without_solution",
+           {{"probes", c.no_solution}, {"median_seconds", median(c.no_solution, c.no_solution_median)}}}};
+}
+
+nlohmann::json probe_cpu_json(const CampaignState& state) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const ProbeRow& r : state.rows)
+    if (r.cpu_seconds >= 0.0) a.push_back({r.contact, r.cpu_seconds});
+  return a;
+}
+
+void set_probe_cpu(CampaignState& state, const nlohmann::json& record) {
+  for (ProbeRow& r : state.rows) r.cpu_seconds = std::numeric_limits<double>::quiet_NaN();
+  if (!record.is_array()) return;
+  for (const auto& e : record) {
+    if (!e.is_array() || e.size() != 2 || !e[0].is_number_integer() || !e[1].is_number()) continue;
+    const double seconds = e[1].get<double>();
+    if (!(seconds >= 0.0) || !std::isfinite(seconds)) continue;
+    const long long k = e[0].get<long long>();
+    const auto row = std::lower_bound(state.rows.begin(), state.rows.end(), k,
+                                      [](const ProbeRow& x, long long c) { return x.contact < c; });
+    if (row != state.rows.end() && row->contact == k) row->cpu_seconds = seconds;
+  }
+}
+
 CampaignSummary summarize(const Packing& p, const CampaignState& state, std::optional<FitWindow> window,
                           double max_inertia, int bootstrap_samples, std::uint64_t seed) {
   CampaignSummary sum;
@@ -692,7 +762,10 @@ std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohm
                       {"settings", settings},
                       {"state_fnv1a64", fnv1a64_hex(state_json.dump())},
                       {"state", state_json}};
-  if (runs) j["runs"] = to_json(*runs);
+  if (runs) {
+    j["runs"] = to_json(*runs);
+    j["probe_cpu"] = probe_cpu_json(state);
+  }
   return j.dump();
 }
 
@@ -710,6 +783,7 @@ std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, c
     throw Error(name + " is damaged (its state does not match its checksum); remove it to start over");
   try {
     CampaignState read = campaign_state_from_json(*state, p);
+    set_probe_cpu(read, j.value("probe_cpu", nlohmann::json()));
     if (runs) *runs = campaign_time_from_json(j.value("runs", nlohmann::json()), static_cast<long long>(read.rows.size()));
     return read;
   } catch (const Error& e) {

@@ -81,6 +81,10 @@ struct ProbeRow {
                                                                 // solution, or an older checkpoint)
   int opened = -1, sliding = -1;  // ProbeResult::opened, sliding (-1: lp, nlgs, no solution, or an
                                   // older checkpoint)
+  // ProbeResult::cpu_seconds (NaN: not measured, or from a checkpoint that did not record it).
+  // Not part of the state: to_json(CampaignState) leaves it out; the checkpoint keeps it
+  // beside the time of the runs (campaign_checkpoint_text, probe_cpu_json).
+  double cpu_seconds = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct CampaignState {
@@ -242,6 +246,31 @@ OverBudget probes_over_budget(const CampaignState& state, long long max_pieces);
 // accept_residual, in g: not converged, residual at most it); 0 where it is the default.
 int probes_accepted(const CampaignState& state, double accept_residual);
 
+// The CPU the probes of `rows` took (ProbeRow::cpu_seconds; docs/probe.md, "Campaigns"):
+// over the rows that record it, how many, the total, the median, the 90th percentile and the
+// largest with its contact (-1 if none); and the medians of the exact probes (converged), the
+// near-exact ones (a solution, not converged) and those without a solution (0 where none).
+// Measured per probe on its own thread, so it does not depend on the other threads' load as
+// a campaign's wall or busy time does; still a measurement, never a result.
+struct ProbeCpu {
+  int timed = 0;
+  double total = 0.0, median = 0.0, p90 = 0.0, max = 0.0;
+  int max_contact = -1;
+  int exact = 0, near_exact = 0, no_solution = 0;  // timed probes of each kind
+  double exact_median = 0.0, near_exact_median = 0.0, no_solution_median = 0.0;
+};
+ProbeCpu probe_cpu(const std::vector<ProbeRow>& rows);
+nlohmann::json to_json(const ProbeCpu& cpu);
+
+// The per-probe CPU of `state` as a checkpoint or shard keeps it ("probe_cpu"): [[contact,
+// seconds], ...] over the rows that record it, in contact order.
+nlohmann::json probe_cpu_json(const CampaignState& state);
+// Sets the rows' cpu_seconds from such a record (rows of contacts it does not list: NaN).
+// Never throws: a missing or damaged record (not an array, an entry that is not [integer,
+// number >= 0]) leaves the rows it cannot read unmeasured, as the time of the runs is read
+// (campaign_time_from_json); it is not part of the state.
+void set_probe_cpu(CampaignState& state, const nlohmann::json& record);
+
 // The fit of d(r) uses `window`, or default_fit_window (analysis/power_law_fit.hpp) if empty.
 // The means take the probes that enter_averages with max_inertia (the campaign's setting).
 CampaignSummary summarize(const Packing& packing, const CampaignState& state,
@@ -274,7 +303,8 @@ CampaignState campaign_state_from_json(const nlohmann::json& j, const Packing& p
 // A probe checkpoint as `unjam probe --all` saves it: the packing's fingerprint
 // (packing_fingerprint, passed in as computing it costs O(N)), the settings (to_json), the state and the FNV-1a hash of its dump.
 // `runs`, if given, is stored beside them as "runs": the time the runs so far took
-// (CampaignTime, core/campaign_time); it is outside the hashed state.
+// (CampaignTime, core/campaign_time), with each probe's CPU as "probe_cpu" (probe_cpu_json);
+// both are outside the hashed state.
 std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohmann::json& settings,
                                      const CampaignState& state, const CampaignTime* runs = nullptr);
 
@@ -282,7 +312,8 @@ std::string campaign_checkpoint_text(const std::string& fingerprint, const nlohm
 // packing, or without a fingerprint). Throws unjam::Error (naming `name`) if the text is not a
 // JSON object, the settings differ, the state does not match its hash, or the state does not
 // fit the packing (campaign_state_from_json). `runs` (may be null): set to the time of the
-// runs that made the state, from the same parse (campaign_time_from_json of its "runs").
+// runs that made the state, from the same parse (campaign_time_from_json of its "runs"). The
+// rows' cpu_seconds are read from its "probe_cpu" (set_probe_cpu), whether or not `runs` is given.
 std::optional<CampaignState> read_campaign_checkpoint(const std::string& text, const std::string& name,
                                                       const Packing& packing, const nlohmann::json& settings,
                                                       CampaignTime* runs = nullptr);

@@ -38,6 +38,11 @@ struct ProbeResult {
   // docs/probe.md, "Which contacts the step opens and sets sliding"). -1 where not known
   // (lp, nlgs, a probe without a solution).
   int opened = -1, sliding = -1;
+  // CPU time the probe took on the thread that computed it (s; core/cpu_time), set by the
+  // campaigns and probe lists (probe/probe_campaign); NaN where not measured. Never a result:
+  // it differs from run to run, so it stays out of probes.csv and of a checkpoint's hashed
+  // state (docs/probe.md, "Campaigns").
+  double cpu_seconds = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The residual of a probe whose solver found no solution (lemke: its path ended on a ray).
