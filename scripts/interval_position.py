@@ -59,7 +59,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from compare_probes import EXACT_RESIDUAL, SOLVED_RESIDUAL, read_campaign  # noqa: E402
 from unjam_plot import (ArgumentParser, UserError, csv_text, format_mu,  # noqa: E402
-                        json_number, json_value, read_csv, read_json, run_main, save_figure,
+                        json_number, json_value, read_intervals, read_json, run_main, save_figure,
                         warn, write_file_atomic)
 
 F_REL_TOL = 1e-9          # f_cont against bounds' fn of one contact: one packing
@@ -102,12 +102,10 @@ def read_cd(directory):
 
 
 def read_bounds(path):
-    t = read_csv(path, ["a", "b", "fn", "fn_min", "fn_max"], min_rows=1)
+    t = read_intervals(path, ["a", "b", "fn", "fn_min", "fn_max"], min_rows=1)
     by_pair = {}
     for i in range(len(t["a"])):
         lo, hi = float(t["fn_min"][i]), float(t["fn_max"][i])
-        if lo > hi:
-            raise UserError(f"{path}: data row {i + 1} has fn_min {lo!r} above fn_max {hi!r}")
         by_pair.setdefault((int(t["a"][i]), int(t["b"][i])), []).append(
             {"fn": float(t["fn"][i]), "fn_min": lo, "fn_max": hi})
     jpath = os.path.splitext(path)[0] + ".json"

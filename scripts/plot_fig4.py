@@ -56,7 +56,7 @@ def read_ensemble(directory):
         bounds_path = os.path.join(directory, "bounds.csv")
         if not os.path.exists(bounds_path):
             raise up.UserError("no fn_min / fn_max in ensemble.csv and no bounds.csv")
-        b = up.read_csv(bounds_path, ["a", "b", "fn_min", "fn_max"])
+        b = up.read_intervals(bounds_path)
         row = {(a, bb): i for i, (a, bb) in enumerate(zip(b["a"], b["b"]))}
         try:
             at = [row[(a, bb)] for a, bb in zip(t["a"], t["b"])]

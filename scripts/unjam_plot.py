@@ -153,6 +153,32 @@ def read_csv(path, columns, optional=(), text=(), allow_nan=(), min_rows=0):
     return out
 
 
+# How far an interval's ends may cross (fn_min above fn_max), relative to max(1, |fn_max|) in
+# the file's force unit, and still be one point: the round-off of two LPs that reach the same
+# optimum from either side (docs/ensemble.md, "Reading bounds.csv").
+INTERVAL_ROUNDOFF = 1e-9
+
+
+def read_intervals(path, columns=("a", "b", "fn_min", "fn_max"), min_rows=0):
+    """A table of admissible intervals (bounds.csv of `unjam bounds`, or any CSV with fn_min
+    and fn_max) by column, as read_csv gives it, read by the one rule every script shares:
+    ends that cross by at most INTERVAL_ROUNDOFF are one point (fn_min set to fn_max, the
+    end the lp probe takes for F_crit); a wider crossing is no interval, and a UserError names
+    its line."""
+    columns = list(columns) + [c for c in ("fn_min", "fn_max") if c not in columns]
+    t = read_csv(path, columns, min_rows=min_rows)
+    lo, hi = t["fn_min"], t["fn_max"]
+    crossed = lo > hi
+    wide = crossed & (lo - hi > INTERVAL_ROUNDOFF * np.maximum(1.0, np.abs(hi)))
+    if wide.any():
+        i = int(np.argmax(wide))
+        raise UserError(f"{path}: data row {i + 1} has fn_min {float(lo[i])!r} above fn_max "
+                        f"{float(hi[i])!r} by more than the LPs' round-off "
+                        f"({INTERVAL_ROUNDOFF:g} relative): not an interval")
+    t["fn_min"] = np.where(crossed, hi, lo)
+    return t
+
+
 def read_json(path):
     """Read a JSON object from path (UserError if missing, not JSON or not an object)."""
     with _open_text(path) as f:

@@ -144,6 +144,51 @@ class IntervalPosition(unittest.TestCase):
         self.assertEqual(int(pair["outside"]), 1)
         self.assertGreater(float(pair["excess_max"]), 0.5)
 
+    def test_5_ends_crossed_by_round_off_are_one_point_and_a_wider_crossing_is_refused(self):
+        # unjam_plot.read_intervals, the reader every script shares: an interval whose fn_min
+        # lies above its fn_max by round-off (two LPs reaching one optimum from either side)
+        # is the point fn_max; by 1e-3 it is no interval.
+        src = R["bounds"]["p50-mu1"]
+        probes = read_rows(os.path.join(R["cd"]["p50-mu1"], "probes.csv"))
+        contact_of = {(int(r["a"]), int(r["b"])): r["contact"] for r in probes}
+
+        def crossed(name, by):
+            """A copy of the bounds with the first probed contact's ends crossed by `by`
+            relative; its contact."""
+            dst = os.path.join(R["tmp"], name + ".csv")
+            shutil.copy(os.path.splitext(src)[0] + ".json", os.path.splitext(dst)[0] + ".json")
+            shutil.copy(src, dst)
+            edited = []
+
+            def cross(rows):
+                for r in rows:
+                    pair = (int(r["a"]), int(r["b"]))
+                    if pair in contact_of and float(r["fn_max"]) > 0.0 and not edited:
+                        r["fn_min"] = repr(float(r["fn_max"]) * (1.0 + by))
+                        edited.append(contact_of[pair])
+            edit_rows(dst, cross)
+            self.assertEqual(len(edited), 1)
+            return dst, edited[0]
+
+        ok, k = crossed("roundoff-bounds", 1e-13)
+        out = os.path.join(R["tmp"], "roundoff-out")
+        p = run(R["cd"]["p50-mu1"], ok, "--out", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        before = {r["contact"]: r for r in R["positions"] if r["packing"].endswith("p50-mu1")}
+        after = {r["contact"]: r for r in read_rows(os.path.join(out, "positions.csv"))}
+        self.assertEqual(before.keys(), after.keys())
+        self.assertEqual(after[k]["fn_min"], after[k]["fn_max"])  # the point fn_max
+        self.assertEqual(after[k]["fn_max"], before[k]["fn_max"])
+        self.assertNotEqual(before[k]["fn_min"], before[k]["fn_max"])
+
+        bad, _ = crossed("crossed-bounds", 1e-3)
+        out = os.path.join(R["tmp"], "crossed-out")
+        p = run(R["cd"]["p50-mu1"], bad, "--out", out)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("not an interval", p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+        self.assertFalse(os.path.exists(out))
+
     def test_4_bad_input_is_refused_and_writes_nothing(self):
         out = os.path.join(R["tmp"], "refused")
         no_json = os.path.join(R["tmp"], "no-json.csv")
