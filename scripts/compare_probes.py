@@ -44,9 +44,11 @@ compare-probes):
                     power-law fits of each probe_summary.json; empty where a fit failed),
                     pieces_median (median over the shared contacts of cd's `sweeps`, the
                     pieces of all its paths; of the returned path only in campaigns run
-                    before 2026-11-27), cpu_s_per_probe_cd (the cd campaign's busy
-                    seconds over all its runs / its timed probes, from all_runs; for a
-                    summary without all_runs, its ranks' busy_seconds / its probes),
+                    before 2026-11-27), cpu_s_per_probe_cd (the mean CPU of the cd
+                    campaign's probes, each on its own thread: cpu_per_probe; for a summary
+                    written before that was recorded, its busy seconds over all its runs /
+                    its timed probes, from all_runs; without all_runs, its ranks'
+                    busy_seconds / its probes: scripts/campaign_time.py),
                     inertial (solved contacts
                     left out by --max-inertia), f_inertia_median_F0, f_inertia_max_F0 and
                     f_inertia_max_contact (cd's f_inertia / F0 over the solved contacts
