@@ -297,6 +297,11 @@ TEST_F(CliReliability, ImpossibleOrOutOfRangeParametersAreRefusedBeforeAnythingR
       {"ensemble " + fixture.string() + " --seed -1", "a seed is an integer"},
       {"ensemble " + fixture.string() + " --samples 0", "must be a finite number > 0"},
       {"bounds " + fixture.string() + " --gap-tol nan --out " + (out / "b.csv").string(), "must be a finite number >= 0"},
+      {"bounds " + fixture.string() + " --lp-tol 1e-3 --out " + (out / "b.csv").string(), "not in range"},
+      {"bounds " + fixture.string() + " --lp-tol 1e-13 --out " + (out / "b.csv").string(), "not in range"},
+      {"bounds " + fixture.string() + " --lp-tol nan --out " + (out / "b.csv").string(), "must be a finite number > 0"},
+      {"bounds " + fixture.string() + " --open-tol 0 --out " + (out / "b.csv").string(), "must be a finite number > 0"},
+      {"bounds " + fixture.string() + " --open-tol 0.5 --out " + (out / "b.csv").string(), "not in range"},
   };
   for (const auto& c : cases) {
     const ToolRun r = run_tool(c.args);
@@ -500,6 +505,10 @@ TEST_F(CliReliability, MergeRefusesDamagedShardsByNameAndWritesNothing) {
   damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["busy_seconds"] = -1; }, "busy_seconds is -1, not >= 0");
   damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j.erase("lp_seconds"); }, "lp_seconds");
   damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j = nlohmann::json::array(); }, "is not a shard");
+  damaged(b, "bounds_shard-0-of-2.json", "bounds.csv", [](nlohmann::json& j) { j["options"]["lp_tolerance"] = 1.0; },
+          "is damaged (force bounds: the LP tolerance must be in [1e-12, 1e-06] (got 1)");
+  damaged(b, bounds_1, "bounds.csv", [](nlohmann::json& j) { j["options"]["open_tol_F0"] = 1e-4; },
+          "come from runs with other settings");
   damaged(pr, probe_1, "probes.csv", [](nlohmann::json& j) { j["wall_seconds"] = "x"; },
           (pr / probe_1).string() + " is damaged (");
   damaged(pr, probe_1, "probes.csv", [](nlohmann::json& j) { j["ranks"] = 5; }, "ranks is not an array");

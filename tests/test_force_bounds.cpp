@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -196,6 +197,60 @@ TEST(ForceBounds, StalledBarrierIsSolvedAgainAtLooserTolerance) {
   unjam::ForceLP normal(sys);
   for (int k = 0; k < sys.num_contacts(); ++k) normal.max_fn(k);
   EXPECT_EQ(normal.loosened_solves(), 0);
+}
+
+// The LP's tolerances are checked before any LP; a wider open tolerance turns exactly the
+// minima at or below it into 0 (some of them without an LP of their own) and leaves every other
+// end to the bit; a looser LP tolerance moves the ends by no more than the docs say
+// (docs/ensemble.md, "The LP's tolerances").
+TEST(ForceBounds, TolerancesAreCheckedAndOpenTolOnlyZeroesTheMinimaBelowIt) {
+  const Packing p = unjam::read_packing(fixture_dir("p50-mu0.1"));
+  const auto sys = unjam::build_equilibrium_system(p);
+  const double F0 = p.force_unit();
+  const double nan = std::nan("");
+  for (const auto& [tolerance, open, why] :
+       {std::tuple{0.0, 1e-9, "LP tolerance must be in [1e-12, 1e-06] (got 0)"},
+        std::tuple{1e-13, 1e-9, "LP tolerance must be in [1e-12, 1e-06] (got 1e-13)"},
+        std::tuple{2e-6, 1e-9, "LP tolerance"}, std::tuple{nan, 1e-9, "LP tolerance"},
+        std::tuple{1e-9, 0.0, "open tolerance must be in (0, 0.001] F0 (got 0)"},
+        std::tuple{1e-9, -1.0, "open tolerance"}, std::tuple{1e-9, 2e-3, "open tolerance"},
+        std::tuple{1e-9, nan, "open tolerance"}}) {
+    unjam::ForceBoundsOptions o;
+    o.tolerance = tolerance;
+    o.open_tol_F0 = open;
+    int lps = 0;
+    o.progress = [&lps](int, int) { ++lps; };
+    try {
+      unjam::compute_force_bounds(sys, o);
+      ADD_FAILURE() << "accepted: tolerance " << tolerance << ", open " << open;
+    } catch (const unjam::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(lps, 0);
+  }
+  const unjam::ForceBounds normal = unjam::compute_force_bounds(sys);
+  unjam::ForceBoundsOptions wide;
+  wide.open_tol_F0 = unjam::kMaxOpenTolF0;  // 1e-3 F0
+  const unjam::ForceBounds w = unjam::compute_force_bounds(sys, wide);
+  int zeroed = 0;
+  for (int k = 0; k < sys.num_contacts(); ++k) {
+    EXPECT_EQ(w.fn_max[k], normal.fn_max[k]) << k;
+    if (normal.fn_min[k] > 1e-3 * F0 * (1 + 1e-6)) {
+      EXPECT_EQ(w.fn_min[k], normal.fn_min[k]) << k;
+    } else {
+      EXPECT_EQ(w.fn_min[k], 0.0) << k;
+      zeroed += normal.fn_min[k] > 0.0;
+    }
+  }
+  EXPECT_GE(w.min_lps_skipped, normal.min_lps_skipped);
+  EXPECT_GE(zeroed, 1);  // p50: one minimum lies in (1e-9, 1e-3] F0
+  unjam::ForceBoundsOptions loose;
+  loose.tolerance = unjam::kMaxLpTolerance;
+  const unjam::ForceBounds l = unjam::compute_force_bounds(sys, loose);
+  double moved = 0.0;
+  for (int k = 0; k < sys.num_contacts(); ++k)
+    moved = std::max({moved, std::abs(l.fn_max[k] - normal.fn_max[k]), std::abs(l.fn_min[k] - normal.fn_min[k])});
+  EXPECT_LT(moved, 2e-6 * F0);  // measured: 4.3e-7 F0
 }
 
 TEST(ForceBounds, PackingNetworkLiesInsideEveryInterval) {
@@ -619,7 +674,7 @@ TEST(BoundsCheckpoint, StoppedRunsResumeToTheBitsOfOneRun) {
   const fs::path file = fs::temp_directory_path() / "unjam_test_bounds_checkpoint.json";
   fs::remove(file);
   const auto settings =
-      unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "barrier", "", sys.num_contacts());
+      unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, unjam::ForceBoundsOptions{}, "", sys.num_contacts());
   unjam::ForceBounds b;
   int runs = 0, lps = 0;
   do {
@@ -660,7 +715,19 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
   const auto sys = unjam::build_equilibrium_system(p);
   const int Nc = sys.num_contacts();
   const fs::path file = fs::temp_directory_path() / "unjam_test_bounds_checkpoint_refused.json";
-  const auto settings = unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "barrier", "", Nc);
+  const unjam::ForceBoundsOptions barrier;
+  unjam::ForceBoundsOptions simplex, looser, wider_open;
+  simplex.method = unjam::LpMethod::simplex;
+  looser.tolerance = 1e-8;
+  wider_open.open_tol_F0 = 1e-6;
+  const auto settings = unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, barrier, "", Nc);
+  // The defaults' settings are those saved before the tolerances could be set (no such keys),
+  // so that such a checkpoint is resumed by the default run; the threads are not part of them.
+  EXPECT_FALSE(settings.contains("lp_tolerance"));
+  EXPECT_FALSE(settings.contains("open_tol_F0"));
+  unjam::ForceBoundsOptions two_threads;
+  two_threads.threads = 2;
+  EXPECT_EQ(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, two_threads, "", Nc), settings);
   unjam::ForceBounds partial;
   partial.fn_min = partial.fn_max = Eigen::VectorXd::Constant(Nc, std::nan(""));
   partial.fn_max[3] = 2.5;
@@ -677,9 +744,11 @@ TEST(BoundsCheckpoint, OtherRunsAndDamagedFilesAreRefusedAndKept) {
     EXPECT_EQ(c.resumed()->iterations, 17);
     EXPECT_EQ(unjam::known_values(*c.resumed()), 1);
   }
-  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-8, "barrier", "", Nc), "fn_tol");
-  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, "simplex", "", Nc), "method");
-  refused(unjam::bounds_checkpoint_settings("p50", other, 1e-9, 1e-9, "barrier", "", Nc), "packing_fingerprint");
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-8, barrier, "", Nc), "fn_tol");
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, simplex, "", Nc), "method");
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, looser, "", Nc), "lp_tolerance: none there, 1e-08 here");
+  refused(unjam::bounds_checkpoint_settings("p50", p, 1e-9, 1e-9, wider_open, "", Nc), "open_tol_F0: none there, 1e-06 here");
+  refused(unjam::bounds_checkpoint_settings("p50", other, 1e-9, 1e-9, barrier, "", Nc), "packing_fingerprint");
   const auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
     auto j = nlohmann::json::parse(unjam::read_file(file));
     edit(j);

@@ -206,6 +206,38 @@ def test_bounds_equal_tool_bit_for_bit(tmp_path, p50):
     assert np.all(b["fn_min"] <= b["fn"] + 1e-9) and np.all(b["fn"] <= b["fn_max"] + 1e-9)
 
 
+def test_bounds_lp_tolerances_as_the_tools_and_checked(tmp_path, p50):
+    """lp_tol and open_tol are --lp-tol and --open-tol: the same intervals to the bit, recorded
+    in bounds.json and in the result; values outside their ranges raise unjam.Error before any
+    LP. A wider open tolerance only turns small minima into 0."""
+    tool("bounds", FIXTURE, "--threads", 1, "--lp-tol", "1e-8", "--open-tol", "1e-4",
+         "--out", tmp_path / "bounds.csv")
+    b = unjam.bounds(p50, threads=1, lp_tol=1e-8, open_tol=1e-4)
+    rows = read_csv(tmp_path / "bounds.csv")
+    for name in ("fn_min", "fn_max"):
+        assert [float(x[name]) for x in rows] == b[name].tolist()
+    params = json.loads((tmp_path / "bounds.json").read_text())["parameters"]
+    assert params["lp_tolerance"] == b["lp_tolerance"] == 1e-8
+    assert params["open_tol_F0"] == b["open_tol_F0"] == 1e-4
+    # Two shards of a job array with the same tolerances merge to the same intervals and record.
+    for i in (0, 1):
+        tool("bounds", FIXTURE, "--threads", 1, "--lp-tol", "1e-8", "--open-tol", "1e-4", "--shard", f"{i}/2",
+             "--out", tmp_path / "shards" / "bounds.csv")
+    tool("merge", FIXTURE, "--out", tmp_path / "shards")
+    assert read_csv(tmp_path / "shards" / "bounds.csv") == rows
+    merged = json.loads((tmp_path / "shards" / "bounds.json").read_text())["parameters"]
+    assert (merged["lp_tolerance"], merged["open_tol_F0"]) == (1e-8, 1e-4)
+    default = unjam.bounds(p50, threads=1)
+    assert default["lp_tolerance"] == 1e-9 and default["open_tol_F0"] == 1e-9
+    F0 = p50.F0
+    assert np.all((b["fn_min"] == 0) | (b["fn_min"] > 1e-4 * F0))
+    assert np.all(b["fn_min"] <= default["fn_min"] + 1e-7 * F0)
+    for bad, why in ((dict(lp_tol=1e-3), "LP tolerance must be in"), (dict(lp_tol=0.0), "LP tolerance"),
+                     (dict(open_tol=float("nan")), "open tolerance must be in"), (dict(open_tol=0.5), "open tolerance")):
+        with pytest.raises(unjam.Error, match=why):
+            unjam.bounds(p50, **bad)
+
+
 def test_friction_threshold_equals_tool(tmp_path, p50):
     """unjam.friction_threshold gives `unjam threshold`'s bracket, to the bit, and from a
     bracket the same end; a bracket whose ends are not as stated raises unjam.Error."""
@@ -323,6 +355,8 @@ def test_bounds_resume_a_stopped_runs_checkpoint_bit_for_bit(tmp_path, p50):
         unjam.bounds(p50, fn_tol=1e-8, checkpoint=checkpoint)
     with pytest.raises(unjam.Error, match="method"):
         unjam.bounds(p50, method="simplex", checkpoint=checkpoint)
+    with pytest.raises(unjam.Error, match=r"lp_tolerance: none there, 1e-08 here"):
+        unjam.bounds(p50, lp_tol=1e-8, checkpoint=checkpoint)
     assert json.loads(checkpoint.read_text()) == saved
     b = unjam.bounds(p50, threads=2, checkpoint=checkpoint)
     for name in ("fn_min", "fn_max"):

@@ -221,17 +221,21 @@ bool print_probe_status(const std::string& dir, const std::string& out_dir) {
 namespace {
 
 // The force bounds' tolerances and LP method as a job's file records them: a checkpoint under
-// "settings" (bounds_checkpoint_settings), a finished shard under "options".
+// "settings" (bounds_checkpoint_settings), a finished shard under "options"; the LP's
+// tolerances are there only where they are not the defaults.
 struct BoundsRecord {
   double gap_tol = 0.0, fn_tol = 0.0;
   std::string method;
+  double lp_tolerance = 0.0, open_tol_F0 = 0.0;
   bool operator==(const BoundsRecord&) const = default;
 };
 
 // From the parsed file `j`: a finished shard's "options" or a checkpoint's "settings".
 BoundsRecord bounds_record(const nlohmann::json& j, bool finished) {
   const nlohmann::json& r = j.at(finished ? "options" : "settings");
-  return {r.at("gap_tol").get<double>(), r.at("fn_tol").get<double>(), r.at("method").get<std::string>()};
+  const ForceBoundsOptions defaults;
+  return {r.at("gap_tol").get<double>(), r.at("fn_tol").get<double>(), r.at("method").get<std::string>(),
+          r.value("lp_tolerance", defaults.tolerance), r.value("open_tol_F0", defaults.open_tol_F0)};
 }
 
 BoundsRecord job_bounds_record(const JobFiles& f) {

@@ -45,6 +45,8 @@ struct BoundsOptions {
   double fn_tol = 1e-9;     // force-carrying: fn > fn_tol F0
   int threads = 0;          // 0: all cores
   std::string method = "barrier";
+  double lp_tol = ForceBoundsOptions{}.tolerance;      // CLP's feasibility tolerance
+  double open_tol = ForceBoundsOptions{}.open_tol_F0;  // open: fn <= open_tol F0
   std::string shard;        // "i/K": this job's share of a job array
   double checkpoint_s = 30.0;  // seconds between checkpoints
   int stop_after = 0;       // > 0: stop (checkpoint saved) after this many new LPs
@@ -65,6 +67,8 @@ ForceBoundsOptions lp_options(const BoundsOptions& opt, int Nc) {
   ForceBoundsOptions lp;
   lp.threads = thread_count(opt.threads);
   lp.method = opt.method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
+  lp.tolerance = opt.lp_tol;
+  lp.open_tol_F0 = opt.open_tol;
   if (Nc >= 500) {
     int next_report = 0;
     lp.progress = [next_report, t_lp = std::chrono::steady_clock::now()](int done, int total) mutable {
@@ -122,7 +126,7 @@ nlohmann::ordered_json bounds_json(const BoundsOptions& opt, const Packing& pack
       {"mean_width_over_mean_fn", width_over_fn},
       {"parameters",
        {{"gap_tol", opt.gap_tol}, {"fn_tol_F0", opt.fn_tol}, {"threads", lp.threads},
-        {"method", opt.method}, {"lp_tolerance", lp.tolerance}}},
+        {"method", opt.method}, {"lp_tolerance", lp.tolerance}, {"open_tol_F0", lp.open_tol_F0}}},
       {"min_lps_skipped", bounds.min_lps_skipped},
       {"iterations", bounds.iterations},
       {"lps_at_looser_tolerance", bounds.loosened_solves},
@@ -196,8 +200,13 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
     fn_min.push_back(b.fn_min[k]);
     fn_max.push_back(b.fn_max[k]);
   }
+  nlohmann::json options = {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}};
+  // the LP's tolerances where they are not the defaults (the shards of earlier versions: without)
+  const ForceBoundsOptions defaults;
+  if (opt.lp_tol != defaults.tolerance) options["lp_tolerance"] = opt.lp_tol;
+  if (opt.open_tol != defaults.open_tol_F0) options["open_tol_F0"] = opt.open_tol;
   nlohmann::json j = {
-      {"options", {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}}},
+      {"options", options},
       {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max}, {"lp_seconds", b.seconds},
       {"busy_seconds", run.loads.at(0).busy_seconds}, {"all_runs", to_json(run.all_runs)},
       {"command", command_line()}};
@@ -229,7 +238,7 @@ void run_bounds(const BoundsOptions& opt) {
   std::optional<BoundsCheckpoint> checkpoint;
   if (dist->gathers())
     checkpoint.emplace(checkpoint_path(opt, shard, shards),
-                       bounds_checkpoint_settings(opt.dir, packing, opt.gap_tol, opt.fn_tol, opt.method, opt.shard,
+                       bounds_checkpoint_settings(opt.dir, packing, opt.gap_tol, opt.fn_tol, lp, opt.shard,
                                                   sys.num_contacts()));
   const CampaignTime earlier = checkpoint ? checkpoint->earlier() : CampaignTime{};
   // The runs' time so far: the earlier runs' and this one's (its busy seconds as the
@@ -277,6 +286,12 @@ void add_bounds_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier or simplex")
       ->capture_default_str()->check(CLI::IsMember({"barrier", "simplex"}));
+  cmd->add_option("--lp-tol", opt->lp_tol,
+                  "CLP's primal and dual feasibility tolerance (docs/ensemble.md, \"The LP's tolerances\")")
+      ->capture_default_str()->check(positive_number() & CLI::Range(kMinLpTolerance, kMaxLpTolerance));
+  cmd->add_option("--open-tol", opt->open_tol,
+                  "a contact some admissible network loads with fn <= open-tol F0 can open: its fn_min is 0")
+      ->capture_default_str()->check(positive_number() & CLI::Range(0.0, kMaxOpenTolF0));
   cmd->add_option("--shard", opt->shard,
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");
@@ -300,6 +315,9 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
     opt.fn_tol = o.at("fn_tol").get<double>();
     opt.method = o.at("method").get<std::string>();
     opt.out = o.at("out").get<std::string>();
+    opt.lp_tol = o.value("lp_tolerance", opt.lp_tol);
+    opt.open_tol = o.value("open_tol_F0", opt.open_tol);
+    check_force_bounds_options(lp_options(opt, 0));
   });
   const auto t_start = std::chrono::steady_clock::now();
   const Packing packing = read_packing(dir);

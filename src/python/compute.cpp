@@ -263,8 +263,8 @@ py::dict campaign_settings(const Packing& p, const std::filesystem::path& path) 
 // at the end, under the GIL on the thread that gathers the LP; its first
 // exception stops the LPs as Ctrl-C does (the checkpoint saved) and is raised.
 py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, const std::string& method,
-                const std::optional<std::filesystem::path>& checkpoint, double checkpoint_every,
-                std::optional<py::function> progress) {
+                double lp_tol, double open_tol, const std::optional<std::filesystem::path>& checkpoint,
+                double checkpoint_every, std::optional<py::function> progress) {
   if (method != "barrier" && method != "simplex") throw Error("method must be barrier or simplex");
   if (!(checkpoint_every >= 0.0)) throw Error("checkpoint_every must be a non-negative number of seconds");
   const auto t_start = std::chrono::steady_clock::now();
@@ -273,6 +273,9 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   };
   ForceBoundsOptions lp;
   lp.method = method == "simplex" ? LpMethod::simplex : LpMethod::barrier;
+  lp.tolerance = lp_tol;
+  lp.open_tol_F0 = open_tol;
+  check_force_bounds_options(lp);  // before the packing's system is built
   SignalPoll poll;
   Callback report(std::move(progress));
   const auto stop = [&] { return report.failed() || poll(); };
@@ -307,7 +310,7 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
       return saved->earlier() + one_run(elapsed(), dist.loads());
     };
     if (checkpoint) {
-      saved.emplace(*checkpoint, bounds_checkpoint_settings("", p, gap_tol, fn_tol, method, "", sys->num_contacts()));
+      saved.emplace(*checkpoint, bounds_checkpoint_settings("", p, gap_tol, fn_tol, lp, "", sys->num_contacts()));
       saved->attach(lp, checkpoint_every, 0, stop, time_so_far);
     }
     b = compute_force_bounds(*sys, lp, dist);  // incomplete if should_stop stopped it
@@ -346,6 +349,8 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   d["lps_at_looser_tolerance"] = b.loosened_solves;
   d["lps_finished_by_simplex"] = b.simplex_finishes;
   d["lps_solved_unscaled"] = b.unscaled_solves;
+  d["lp_tolerance"] = lp.tolerance;
+  d["open_tol_F0"] = lp.open_tol_F0;
   return d;
 }
 
@@ -572,8 +577,11 @@ void bind_compute(py::module_& m) {
         "tool would not have written on this packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",
+        py::arg("lp_tol") = ForceBoundsOptions{}.tolerance, py::arg("open_tol") = ForceBoundsOptions{}.open_tol_F0,
         py::arg("checkpoint") = py::none(), py::arg("checkpoint_every") = 30.0, py::arg("progress") = py::none(),
         "[fn_min, fn_max] of every contact over the admissible force networks, as `unjam bounds`. "
+        "lp_tol, open_tol: as --lp-tol and --open-tol (CLP's feasibility tolerance; a contact some admissible "
+        "network loads with fn <= open_tol F0 has fn_min 0); outside their ranges unjam.Error. "
         "checkpoint: a file to resume from (if it is there) and to save the intervals known so far in, "
         "every checkpoint_every seconds and when interrupted (Ctrl-C: KeyboardInterrupt once it is saved); "
         "removed once every interval is known. A checkpoint of another packing or other settings is refused. "

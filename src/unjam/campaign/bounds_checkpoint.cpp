@@ -34,11 +34,18 @@ Eigen::VectorXd values_of(const nlohmann::json& j) {
 }  // namespace
 
 nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const Packing& packing, double gap_tol,
-                                          double fn_tol, const std::string& method, const std::string& shard,
+                                          double fn_tol, const ForceBoundsOptions& lp, const std::string& shard,
                                           int contacts) {
-  return {{"packing", packing_name}, {"packing_fingerprint", packing_fingerprint(packing)}, {"gap_tol", gap_tol},
-          {"fn_tol", fn_tol},        {"method", method},
-          {"shard", shard},          {"contacts", contacts}};
+  nlohmann::json j = {{"packing", packing_name}, {"packing_fingerprint", packing_fingerprint(packing)},
+                      {"gap_tol", gap_tol},      {"fn_tol", fn_tol},
+                      {"method", lp.method == LpMethod::simplex ? "simplex" : "barrier"},
+                      {"shard", shard},          {"contacts", contacts}};
+  // Recorded where they differ from the defaults, so that a checkpoint saved before they could
+  // be set is the default run's.
+  const ForceBoundsOptions defaults;
+  if (lp.tolerance != defaults.tolerance) j["lp_tolerance"] = lp.tolerance;
+  if (lp.open_tol_F0 != defaults.open_tol_F0) j["open_tol_F0"] = lp.open_tol_F0;
+  return j;
 }
 
 long long known_values(const ForceBounds& b) {

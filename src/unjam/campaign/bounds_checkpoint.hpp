@@ -22,10 +22,11 @@ namespace unjam {
 
 // What identifies a run of the bounds: the packing (as named by the run, "packing", and by its
 // contents, "packing_fingerprint"), the admissible set (gap_tol in R_max, fn_tol in F0), the LP
-// method ("barrier" or "simplex"), the shard ("i/K" or empty) and the number of contacts of the
-// system. The thread count is not part of it.
+// of `lp`: its method ("barrier" or "simplex") and, where they are not the defaults, its
+// tolerances ("lp_tolerance", "open_tol_F0"); the shard ("i/K" or empty) and the number of
+// contacts of the system. The thread count and the hooks of `lp` are not part of it.
 nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const Packing& packing, double gap_tol,
-                                          double fn_tol, const std::string& method, const std::string& shard,
+                                          double fn_tol, const ForceBoundsOptions& lp, const std::string& shard,
                                           int contacts);
 
 // The values known in a partial result: the finite entries of fn_min and fn_max.

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -76,6 +77,20 @@ LpOutcome solve_lp(ForceLP& lp, double open_tol, bool keep_network, Solve solve)
 
 }  // namespace
 
+void check_force_bounds_options(const ForceBoundsOptions& options) {
+  const auto text = [](double x) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%g", x);
+    return std::string(s);
+  };
+  if (!(options.tolerance >= kMinLpTolerance && options.tolerance <= kMaxLpTolerance))
+    throw Error("force bounds: the LP tolerance must be in [" + text(kMinLpTolerance) + ", " +
+                text(kMaxLpTolerance) + "] (got " + text(options.tolerance) + ")");
+  if (!(options.open_tol_F0 > 0.0 && options.open_tol_F0 <= kMaxOpenTolF0))
+    throw Error("force bounds: the open tolerance must be in (0, " + text(kMaxOpenTolF0) + "] F0 (got " +
+                text(options.open_tol_F0) + ")");
+}
+
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
                                  const ForceBoundsOptions& options) {
   LocalDistributor local;
@@ -84,6 +99,7 @@ ForceBounds compute_force_bounds(const EquilibriumSystem& system,
 
 ForceBounds compute_force_bounds(const EquilibriumSystem& system, const ForceBoundsOptions& options,
                                  WorkDistributor& distributor) {
+  check_force_bounds_options(options);
   const auto t_start = std::chrono::steady_clock::now();
   const int Nc = system.num_contacts();
   const double unknown = std::numeric_limits<double>::quiet_NaN();

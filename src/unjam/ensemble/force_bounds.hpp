@@ -18,13 +18,23 @@ namespace unjam {
 
 struct ForceBounds;
 
+// The range of ForceBoundsOptions::tolerance, the range measured (docs/ensemble.md, "The LP's
+// tolerances"): below it CLP's barrier ends LPs "optimal" at wrong points (at 1e-13 on p50).
+inline constexpr double kMinLpTolerance = 1e-12, kMaxLpTolerance = 1e-6;
+// The largest ForceBoundsOptions::open_tol_F0: a contact carrying 1e-3 F0 is not open.
+inline constexpr double kMaxOpenTolF0 = 1e-3;
+
 struct ForceBoundsOptions {
   int threads = 1;                  // OpenMP threads, one ForceLP copy each
   LpMethod method = LpMethod::barrier;
-  double tolerance = 1e-9;          // CLP feasibility tolerance, see ForceLP
+  // CLP's primal and dual feasibility tolerance (absolute, on the scaled model; see ForceLP).
+  // 1e-9 is the tested value; allowed: [kMinLpTolerance, kMaxLpTolerance] (docs/ensemble.md,
+  // "The LP's tolerances").
+  double tolerance = 1e-9;
   bool keep_networks_at_max = false;  // store the argmax network of every contact
   // A contact with fn <= open_tol_F0 F0 in an admissible network can open: its fn_min is 0.
   // Minima at or below this are reported as 0 (the LP's own accuracy is ~tolerance).
+  // Allowed: (0, kMaxOpenTolF0].
   double open_tol_F0 = 1e-9;
   // Called with (LPs done, total = 2 N_c) after every LP, one call at a time; may be empty.
   std::function<void(int, int)> progress;
@@ -52,6 +62,10 @@ struct ForceBounds {
   bool complete = true;
 };
 
+// Throws unjam::Error, naming the option and its range, where tolerance is not in
+// [kMinLpTolerance, kMaxLpTolerance] or open_tol_F0 not in (0, kMaxOpenTolF0] (NaN in neither).
+void check_force_bounds_options(const ForceBoundsOptions& options);
+
 // Both ends of every contact's interval. Every optimal network is admissible, so a contact
 // it leaves open (fn <= open_tol) can open: fn_min = 0 with no LP of its own. Hence:
 //   1. fn_max of every contact (one LP each); the contacts its argmax networks open get
@@ -62,6 +76,7 @@ struct ForceBounds {
 // The LPs are handed out one at a time (the simplex: in contiguous chunks of 16) to the
 // threads; each barrier LP starts from scratch, so its optimum does not depend on which thread
 // solves it, nor on what it solved before.
+// Throws unjam::Error for options outside their ranges (check_force_bounds_options).
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
                                  const ForceBoundsOptions& options = {});
 
