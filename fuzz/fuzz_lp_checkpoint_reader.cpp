@@ -42,7 +42,7 @@ const unjam::Packing& packing() {
 
 const nlohmann::json& bounds_settings() {
   static const nlohmann::json s =
-      unjam::bounds_checkpoint_settings("p50-mu0.1", packing(), 1e-9, 1e-9, "barrier", "", kContacts);
+      unjam::bounds_checkpoint_settings("p50-mu0.1", packing(), 1e-9, 1e-9, unjam::ForceBoundsOptions{}, "", kContacts);
   return s;
 }
 
