@@ -233,9 +233,10 @@ struct BoundsRecord {
 // From the parsed file `j`: a finished shard's "options" or a checkpoint's "settings".
 BoundsRecord bounds_record(const nlohmann::json& j, bool finished) {
   const nlohmann::json& r = j.at(finished ? "options" : "settings");
-  const ForceBoundsOptions defaults;
+  ForceBoundsOptions lp;
+  get_lp_tolerances(r, lp);
   return {r.at("gap_tol").get<double>(), r.at("fn_tol").get<double>(), r.at("method").get<std::string>(),
-          r.value("lp_tolerance", defaults.tolerance), r.value("open_tol_F0", defaults.open_tol_F0)};
+          lp.tolerance, lp.open_tol_F0};
 }
 
 BoundsRecord job_bounds_record(const JobFiles& f) {

@@ -192,8 +192,8 @@ std::filesystem::path output_dir(const BoundsOptions& opt) {
 }
 
 // A finished shard: the intervals of its contacts (k mod K = i) and its counts.
-void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const ForceBounds& b,
-                        const BoundsRun& run) {
+void write_bounds_shard(const BoundsOptions& opt, const ForceBoundsOptions& lp, int shard, int shards,
+                        const ForceBounds& b, const BoundsRun& run) {
   nlohmann::json contacts = nlohmann::json::array(), fn_min = contacts, fn_max = contacts;
   for (Eigen::Index k = shard; k < b.fn_max.size(); k += shards) {
     contacts.push_back(k);
@@ -201,10 +201,7 @@ void write_bounds_shard(const BoundsOptions& opt, int shard, int shards, const F
     fn_max.push_back(b.fn_max[k]);
   }
   nlohmann::json options = {{"gap_tol", opt.gap_tol}, {"fn_tol", opt.fn_tol}, {"method", opt.method}, {"out", opt.out}};
-  // the LP's tolerances where they are not the defaults (the shards of earlier versions: without)
-  const ForceBoundsOptions defaults;
-  if (opt.lp_tol != defaults.tolerance) options["lp_tolerance"] = opt.lp_tol;
-  if (opt.open_tol != defaults.open_tol_F0) options["open_tol_F0"] = opt.open_tol;
+  put_lp_tolerances(options, lp);
   nlohmann::json j = {
       {"options", options},
       {"contacts", contacts}, {"fn_min", fn_min}, {"fn_max", fn_max}, {"lp_seconds", b.seconds},
@@ -263,7 +260,7 @@ void run_bounds(const BoundsOptions& opt) {
   checkpoint->remove();
   run.loads = dist->loads();
   run.all_runs = time_so_far();
-  if (shards > 1) return write_bounds_shard(opt, shard, shards, bounds, run);
+  if (shards > 1) return write_bounds_shard(opt, lp, shard, shards, bounds, run);
   const auto t_rank = std::chrono::steady_clock::now();
   const RankInfo rank = equilibrium_rank(sys);
   run.t_rank = seconds_since(t_rank);
@@ -315,9 +312,11 @@ bool merge_bounds_shards(const std::string& dir, const std::string& out) {
     opt.fn_tol = o.at("fn_tol").get<double>();
     opt.method = o.at("method").get<std::string>();
     opt.out = o.at("out").get<std::string>();
-    opt.lp_tol = o.value("lp_tolerance", opt.lp_tol);
-    opt.open_tol = o.value("open_tol_F0", opt.open_tol);
-    check_force_bounds_options(lp_options(opt, 0));
+    ForceBoundsOptions tolerances;
+    get_lp_tolerances(o, tolerances);
+    check_force_bounds_options(tolerances);
+    opt.lp_tol = tolerances.tolerance;
+    opt.open_tol = tolerances.open_tol_F0;
   });
   const auto t_start = std::chrono::steady_clock::now();
   const Packing packing = read_packing(dir);

@@ -40,12 +40,20 @@ nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const
                       {"gap_tol", gap_tol},      {"fn_tol", fn_tol},
                       {"method", lp.method == LpMethod::simplex ? "simplex" : "barrier"},
                       {"shard", shard},          {"contacts", contacts}};
-  // Recorded where they differ from the defaults, so that a checkpoint saved before they could
-  // be set is the default run's.
+  put_lp_tolerances(j, lp);
+  return j;
+}
+
+void put_lp_tolerances(nlohmann::json& j, const ForceBoundsOptions& lp) {
   const ForceBoundsOptions defaults;
   if (lp.tolerance != defaults.tolerance) j["lp_tolerance"] = lp.tolerance;
   if (lp.open_tol_F0 != defaults.open_tol_F0) j["open_tol_F0"] = lp.open_tol_F0;
-  return j;
+}
+
+void get_lp_tolerances(const nlohmann::json& j, ForceBoundsOptions& lp) {
+  const ForceBoundsOptions defaults;
+  lp.tolerance = j.value("lp_tolerance", defaults.tolerance);
+  lp.open_tol_F0 = j.value("open_tol_F0", defaults.open_tol_F0);
 }
 
 long long known_values(const ForceBounds& b) {

@@ -29,6 +29,15 @@ nlohmann::json bounds_checkpoint_settings(const std::string& packing_name, const
                                           double fn_tol, const ForceBoundsOptions& lp, const std::string& shard,
                                           int contacts);
 
+// The LP's tolerances of `lp`, written into the object j as "lp_tolerance" and "open_tol_F0"
+// where they are not ForceBoundsOptions' defaults (so that a file written before they could be
+// set reads as the default run's): as the checkpoint's settings and the shards' options
+// store them.
+void put_lp_tolerances(nlohmann::json& j, const ForceBoundsOptions& lp);
+// The same read back from j into lp, the defaults where absent. Throws nlohmann's exception for
+// a value that is not a number; the ranges are check_force_bounds_options'.
+void get_lp_tolerances(const nlohmann::json& j, ForceBoundsOptions& lp);
+
 // The values known in a partial result: the finite entries of fn_min and fn_max.
 long long known_values(const ForceBounds& b);
 

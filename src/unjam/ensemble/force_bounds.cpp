@@ -78,17 +78,17 @@ LpOutcome solve_lp(ForceLP& lp, double open_tol, bool keep_network, Solve solve)
 }  // namespace
 
 void check_force_bounds_options(const ForceBoundsOptions& options) {
-  const auto text = [](double x) {
-    char s[32];
-    std::snprintf(s, sizeof s, "%g", x);
-    return std::string(s);
-  };
-  if (!(options.tolerance >= kMinLpTolerance && options.tolerance <= kMaxLpTolerance))
-    throw Error("force bounds: the LP tolerance must be in [" + text(kMinLpTolerance) + ", " +
-                text(kMaxLpTolerance) + "] (got " + text(options.tolerance) + ")");
-  if (!(options.open_tol_F0 > 0.0 && options.open_tol_F0 <= kMaxOpenTolF0))
-    throw Error("force bounds: the open tolerance must be in (0, " + text(kMaxOpenTolF0) + "] F0 (got " +
-                text(options.open_tol_F0) + ")");
+  char why[96];
+  if (!(options.tolerance >= kMinLpTolerance && options.tolerance <= kMaxLpTolerance)) {
+    std::snprintf(why, sizeof why, "the LP tolerance must be in [%g, %g] (got %g)", kMinLpTolerance,
+                  kMaxLpTolerance, options.tolerance);
+    throw Error(std::string("force bounds: ") + why);
+  }
+  if (!(options.open_tol_F0 > 0.0 && options.open_tol_F0 <= kMaxOpenTolF0)) {
+    std::snprintf(why, sizeof why, "the open tolerance must be in (0, %g] F0 (got %g)", kMaxOpenTolF0,
+                  options.open_tol_F0);
+    throw Error(std::string("force bounds: ") + why);
+  }
 }
 
 ForceBounds compute_force_bounds(const EquilibriumSystem& system,
