@@ -3,10 +3,12 @@
 // inside them, F_crit of the LP probe equal to fn_max on every force-carrying contact, and
 // ensemble.json against ensemble.csv (and its command line); a fixed seed gives the same
 // bytes; --help of ensemble and bounds gives the defaults; `unjam threshold` brackets the
-// friction threshold.
+// friction threshold; --lp-tol and --open-tol give the intervals of `unjam bounds`.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -108,6 +110,49 @@ TEST_F(CliEnsemble, OneSamplerWithoutProbesWritesOnlyItsColumns) {
   EXPECT_FALSE(j["methods"].contains("walk"));
   EXPECT_EQ(j["probe"]["method"], "none");
   EXPECT_FALSE(j["probe"].contains("contacts_probed"));
+}
+
+// --lp-tol and --open-tol (docs/ensemble.md, "The LP's tolerances") give ensemble.csv the
+// intervals `unjam bounds` gives with the same tolerances, to the bit, and ensemble.json
+// records them; the defaults are recorded too. --open-tol 1e-3 zeroes some minima the default
+// leaves positive on this packing, so the comparison can tell the tolerances apart.
+TEST_F(CliEnsemble, LpTolerancesGiveTheIntervalsOfBoundsAndAreRecorded) {
+  const auto intervals = [](const fs::path& csv) {
+    const CsvTable t = CsvTable::read(csv);
+    std::map<std::pair<std::int64_t, std::int64_t>, std::pair<double, double>> m;  // both round-trip
+    for (std::size_t i = 0; i < t.rows(); ++i)
+      m[{t.integer(i, t.column("a")), t.integer(i, t.column("b"))}] = {
+          t.number(i, t.column("fn_min")), t.number(i, t.column("fn_max"))};
+    return m;
+  };
+  const std::string args = " --samples 50 --method hit-and-run --probe none --threads 2";
+  ASSERT_EQ(run_tool("ensemble " + q(dir_) + args).exit_code, 0);
+  const auto by_default = intervals(dir_ / "ensemble.csv");
+  const nlohmann::json d = read_json_file(dir_ / "ensemble.json");
+  EXPECT_EQ(d["parameters"]["lp_tolerance"].get<double>(), 1e-9);
+  EXPECT_EQ(d["parameters"]["open_tol_F0"].get<double>(), 1e-9);
+
+  const std::string tols = " --lp-tol 1e-8 --open-tol 1e-3";
+  const testing::ToolRun e = run_tool("ensemble " + q(dir_) + args + tols);
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  const auto tolerant = intervals(dir_ / "ensemble.csv");
+  const nlohmann::json j = read_json_file(dir_ / "ensemble.json");
+  EXPECT_EQ(j["parameters"]["lp_tolerance"].get<double>(), 1e-8);
+  EXPECT_EQ(j["parameters"]["open_tol_F0"].get<double>(), 1e-3);
+  const testing::ToolRun b = run_tool("bounds " + q(dir_) + " --threads 2" + tols + " --out " + q(dir_ / "b.csv"));
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  EXPECT_EQ(tolerant, intervals(dir_ / "b.csv")) << "the ensemble's intervals are bounds' with the same tolerances";
+  ASSERT_EQ(tolerant.size(), by_default.size());
+  const double F0 = read_json_file(dir_ / "meta.json")["F0"].get<double>();
+  int zeroed = 0;
+  for (const auto& [ab, ends] : tolerant) {
+    const double lo = by_default.at(ab).first;
+    if (lo > 1e-9 * F0 && lo <= 1e-3 * F0) {
+      ++zeroed;
+      EXPECT_EQ(ends.first, 0.0) << ab.first << "-" << ab.second;
+    }
+  }
+  EXPECT_GT(zeroed, 0) << "no minimum in (1e-9, 1e-3] F0: the test cannot tell the open tolerances apart";
 }
 
 // `unjam threshold` on p50-mu0.1 (its threshold is 0.048): the bracket in the JSON and the
@@ -219,7 +264,9 @@ TEST(CliHelp, BoundsAndEnsembleShowTheirDefaults) {
                         "--kick FLOAT:NUMBER >= 0=1", "--walk-tol FLOAT:NUMBER > 0=1e-10",
                         "--probe-g FLOAT:NUMBER > 0=1e-09", "--probe-dt FLOAT:NUMBER >= 0=0",
                         "--probe-velocity-tol FLOAT:NUMBER > 0=1e-06", "--gap-tol FLOAT:NUMBER >= 0=1e-09",
-                        "--fn-tol FLOAT:NUMBER >= 0=1e-09", "--threads INT:NUMBER >= 0=0"})
+                        "--fn-tol FLOAT:NUMBER >= 0=1e-09", "--threads INT:NUMBER >= 0=0",
+                        "--lp-tol FLOAT:(NUMBER > 0) AND (FLOAT in [1e-12 - 1e-06])=1e-09",
+                        "--open-tol FLOAT:(NUMBER > 0) AND (FLOAT in [0 - 0.001])=1e-09"})
     EXPECT_NE(e.output.find(d), std::string::npos) << d << " in\n" << e.output;
   const testing::ToolRun b = run_tool("bounds --help");
   ASSERT_EQ(b.exit_code, 0) << b.output;

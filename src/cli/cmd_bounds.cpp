@@ -283,12 +283,7 @@ void add_bounds_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--method", opt->method, "LP method: barrier or simplex")
       ->capture_default_str()->check(CLI::IsMember({"barrier", "simplex"}));
-  cmd->add_option("--lp-tol", opt->lp_tol,
-                  "CLP's primal and dual feasibility tolerance (docs/ensemble.md, \"The LP's tolerances\")")
-      ->capture_default_str()->check(positive_number() & CLI::Range(kMinLpTolerance, kMaxLpTolerance));
-  cmd->add_option("--open-tol", opt->open_tol,
-                  "a contact some admissible network loads with fn <= open-tol F0 can open: its fn_min is 0")
-      ->capture_default_str()->check(positive_number() & CLI::Range(0.0, kMaxOpenTolF0));
+  add_lp_tolerance_options(cmd, opt->lp_tol, opt->open_tol);
   cmd->add_option("--shard", opt->shard,
                   "i/K: only the contacts k with k mod K = i (one job of a job array; `unjam merge` "
                   "joins the K shards into bounds.csv and bounds.json)");

@@ -222,7 +222,8 @@ void run_ensemble(const EnsembleOptions& opt) {
       {"seed", s.seed},
       {"methods", methods_json(s, r)},
       {"probe", probe_json(s, r)},
-      {"parameters", {{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol}}},
+      {"parameters", {{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol},
+                      {"lp_tolerance", s.lp_tol}, {"open_tol_F0", s.open_tol}}},
       {"timings_s", {{"lp", r.bounds.seconds}, {"total", seconds_since(t_start)}}},
   };
   write_file_atomic(dir / "ensemble.json", j.dump(2) + "\n");
@@ -263,6 +264,7 @@ void add_ensemble_command(CLI::App& app) {
                   "nlgs probe convergence: max |dU| per sweep below this times g / dt")
       ->capture_default_str()->check(positive_number());
   add_contact_selection_options(cmd, opt->settings.gap_tol, opt->settings.fn_tol);
+  add_lp_tolerance_options(cmd, opt->settings.lp_tol, opt->settings.open_tol);
   cmd->add_option("--threads", opt->settings.threads,
                   "OpenMP threads for the LP bounds and the probes (0: all cores)")
       ->capture_default_str()->check(non_negative_number());

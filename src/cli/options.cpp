@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "unjam/ensemble/force_bounds.hpp"
+
 namespace unjam::cli {
 namespace {
 
@@ -57,6 +59,15 @@ void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_to
       ->capture_default_str()->check(non_negative_number());
   cmd->add_option("--fn-tol", fn_tol, "force-carrying contacts: fn > fn-tol F0")
       ->capture_default_str()->check(non_negative_number());
+}
+
+void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol) {
+  cmd->add_option("--lp-tol", lp_tol,
+                  "CLP's primal and dual feasibility tolerance (docs/ensemble.md, \"The LP's tolerances\")")
+      ->capture_default_str()->check(positive_number() & CLI::Range(kMinLpTolerance, kMaxLpTolerance));
+  cmd->add_option("--open-tol", open_tol,
+                  "a contact some admissible network loads with fn <= open-tol F0 can open: its fn_min is 0")
+      ->capture_default_str()->check(positive_number() & CLI::Range(0.0, kMaxOpenTolF0));
 }
 
 }  // namespace unjam::cli

@@ -15,4 +15,9 @@ CLI::Validator positive_number();       // finite, > 0
 // which contacts enter it (docs/ensemble.md, "Which contacts and rows enter").
 void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_tol);
 
+// --lp-tol and --open-tol of the commands that compute the force bounds (bounds, ensemble):
+// ForceBoundsOptions::tolerance in [kMinLpTolerance, kMaxLpTolerance] and open_tol_F0 in
+// (0, kMaxOpenTolF0] (ensemble/force_bounds.hpp; docs/ensemble.md, "The LP's tolerances").
+void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol);
+
 }  // namespace unjam::cli

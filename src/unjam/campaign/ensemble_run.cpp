@@ -109,6 +109,8 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
   ForceBoundsOptions lp;
   lp.threads = threads;
+  lp.tolerance = in.lp_tol;
+  lp.open_tol_F0 = in.open_tol;
   r.bounds = compute_force_bounds(sys, lp);
   if (in.hit_and_run) {
     HitAndRunOptions hr;

@@ -44,6 +44,11 @@ struct EnsembleSettings {
   double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
   double gap_tol = 1e-9;          // admissible set: touching, gap < gap_tol (R_max) ...
   double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
+  // The LP intervals' tolerances, ForceBoundsOptions::tolerance and ::open_tol_F0 (F0), with
+  // their ranges (ensemble/force_bounds.hpp; docs/ensemble.md, "The LP's tolerances"); the
+  // samplers and F_crit's place t read those intervals.
+  double lp_tol = ForceBoundsOptions{}.tolerance;
+  double open_tol = ForceBoundsOptions{}.open_tol_F0;
   int threads = 0;                // LP bounds and probes; 0: omp_get_max_threads()
   std::function<void(const ForceNetwork&)> on_sample;  // every hit-and-run sample; may be empty
   // (what, done, total) as the walk and the probes go on; may be empty.
@@ -83,7 +88,7 @@ ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettin
 
 // Every part of the ensemble of `packing` with `settings`. Throws unjam::Error as the
 // samplers and probes do (the probes' errors name the contact), and for an unknown probe
-// name before any LP.
+// name or LP tolerances out of their ranges (check_force_bounds_options) before any LP.
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& settings);
 
 // The probes' settings: the packing's own contact model (touch gap and bath mass from its
