@@ -153,6 +153,24 @@ TEST_F(CliEnsemble, LpTolerancesGiveTheIntervalsOfBoundsAndAreRecorded) {
     }
   }
   EXPECT_GT(zeroed, 0) << "no minimum in (1e-9, 1e-3] F0: the test cannot tell the open tolerances apart";
+
+  // The lp probe solves the LP at the ensemble's tolerance: over the probe's own set (the
+  // packing's touch gap, 1e-6 here) its F_crit is fn_max to the bit (at 1e-8, where some
+  // maxima differ from the default's; test_cli_probe shows they do).
+  const testing::ToolRun p = run_tool("ensemble " + q(dir_) +
+                                      " --samples 50 --method hit-and-run --probe lp --threads 2 --gap-tol 1e-6 --lp-tol 1e-8");
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  const CsvTable t = CsvTable::read(dir_ / "ensemble.csv");
+  int probed = 0;
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    if (t.field(i, t.column("f_crit")).empty()) continue;
+    ++probed;
+    EXPECT_EQ(t.number(i, t.column("f_crit")), t.number(i, t.column("fn_max"))) << "row " << i;
+  }
+  EXPECT_EQ(probed, 81);
+  const nlohmann::json pj = read_json_file(dir_ / "ensemble.json");
+  EXPECT_EQ(pj["probe"]["f_crit_over_fn_max"]["min"].get<double>(), 1.0);
+  EXPECT_EQ(pj["probe"]["f_crit_over_fn_max"]["max"].get<double>(), 1.0);
 }
 
 // `unjam threshold` on p50-mu0.1 (its threshold is 0.048): the bracket in the JSON and the

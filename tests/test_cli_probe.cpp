@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -461,6 +462,41 @@ TEST_F(CliProbe, ACheckpointOfOtherSettingsNamesThemAndResumesWithThem) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   ASSERT_EQ(run_tool("probe " + q(dir_) + args + q(whole) + " --dt 1e-3").exit_code, 0);
   EXPECT_EQ(read_file(out / "probes.csv"), read_file(whole / "probes.csv"));
+}
+
+TEST_F(CliProbe, TheLpMethodsTolerancesFcritIsBoundsMaximumAtTheSameTolerance) {
+  // --lp-tol: the lp probe's F_crit is `unjam bounds`' fn_max of the same contact over the same
+  // set (--gap-tol 1e-6: the packing's touch gap, the default of a packing that records none)
+  // at the same LP tolerance, to the bit, at the default 1e-9 and at 1e-8 (which moves some
+  // maxima, so the test tells the two apart); the tolerance is recorded where set and a
+  // checkpoint made with it is not resumed without it.
+  const std::string campaign = "probe " + q(dir_) + " --sample 20 --method lp --quiet --threads 2 ";
+  const nlohmann::json by_default = expect_recorded_where_set(campaign, " --lp-tol 1e-8", "lp_tolerance", 1e-8);
+  EXPECT_EQ(by_default["settings"].value("lp_tolerance", 0.0), 0.0) << "the default is not written out";
+  using Ends = std::map<std::pair<std::int64_t, std::int64_t>, double>;
+  const auto column = [](const fs::path& csv, const char* name) {
+    const CsvTable t = CsvTable::read(csv);
+    Ends m;
+    for (std::size_t i = 0; i < t.rows(); ++i)
+      m[{t.integer(i, t.column("a")), t.integer(i, t.column("b"))}] = t.number(i, t.column(name));
+    return m;
+  };
+  int moved = 0;
+  const Ends crit_default = column(root_ / "unrecorded" / "probes.csv", "f_crit");
+  const Ends crit_tolerant = column(root_ / "recorded" / "probes.csv", "f_crit");
+  ASSERT_EQ(crit_default.size(), 20u);
+  for (const auto& [tol, crit] : {std::pair{std::string(), crit_default}, std::pair{std::string(" --lp-tol 1e-8"), crit_tolerant}}) {
+    const fs::path b = root_ / "b.csv";
+    const testing::ToolRun r = run_tool("bounds " + q(dir_) + " --threads 2 --gap-tol 1e-6" + tol + " --out " + q(b));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const Ends fn_max = column(b, "fn_max");
+    for (const auto& [ab, f] : crit) {
+      ASSERT_EQ(fn_max.count(ab), 1u);
+      EXPECT_EQ(f, fn_max.at(ab)) << ab.first << "-" << ab.second << tol;
+    }
+  }
+  for (const auto& [ab, f] : crit_default) moved += f != crit_tolerant.at(ab) ? 1 : 0;
+  EXPECT_GT(moved, 0) << "1e-8 and 1e-9 give the same maxima: the test cannot tell them apart";
 }
 
 TEST_F(CliProbe, AWindowIsRecordedAndRefusedWhereItDoesNotApply) {

@@ -603,7 +603,22 @@ def test_a_campaigns_settings_are_read_back_from_its_record(tmp_path, p50):
     lp = tmp_path / "lp"
     tool("probe", FIXTURE, "--sample", 2, "--threads", 1, "--out", lp, "--quiet")
     d = unjam.campaign_settings(p50, lp / "probe_summary.json")
-    assert (d["method"], d["dt"], d["window"], d["cd"]) == ("lp", None, None, unjam.CdSettings())
+    assert (d["method"], d["dt"], d["window"], d["cd"], d["lp_tol"]) == ("lp", None, None, unjam.CdSettings(), 1e-9)
+    # The lp probe's LP tolerance: recorded by `--lp-tol`, read back, and the module's probe at it
+    # gives the campaign's F_crit and the maxima of unjam.bounds over the same set (the packing's
+    # touch gap, 1e-6) at the same tolerance, bit for bit.
+    tol = tmp_path / "lp-tol"
+    tool("probe", FIXTURE, "--sample", 4, "--lp-tol", 1e-8, "--threads", 1, "--out", tol, "--quiet")
+    d = unjam.campaign_settings(p50, tol / "probe_summary.json")
+    assert (d["method"], d["lp_tol"]) == ("lp", 1e-8)
+    rows = read_csv(tol / "probes.csv")
+    results = unjam.probe(p50, contacts=[int(x["contact"]) for x in rows], method=d["method"], lp_tol=d["lp_tol"])
+    assert [q.f_crit for q in results] == [float(x["f_crit"]) for x in rows]
+    b = unjam.bounds(p50, gap_tol=1e-6, lp_tol=1e-8, threads=1)
+    fn_max = {(int(a), int(c)): m for a, c, m in zip(b["a"], b["b"], b["fn_max"])}
+    assert [q.f_crit for q in results] == [fn_max[(q.a, q.b)] for q in results]
+    with pytest.raises(unjam.Error, match="--lp-tol applies to the lp method, not to cd"):
+        unjam.probe(p50, contact=3, method="cd", lp_tol=1e-8)
     # Refused: a record the tool would not have written on this packing (another contact
     # model, a value of the wrong type), a file without one.
     record = json.loads((out / "probe_summary.json").read_text())

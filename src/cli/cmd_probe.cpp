@@ -44,6 +44,7 @@ struct ProbeOptions {
   int sample = 0;
   std::uint64_t seed = 1;
   double g = 1e-9, velocity_tol = 1e-6;
+  double lp_tol = KinematicProbeSettings{}.lp_tolerance;  // --lp-tol: lp only (validate)
   double dt = 0.0;                 // 0: default_probe_dt(method, g)
   double max_inertia = 0.0;        // > 0: CampaignSettings::max_inertia (F0)
   double window = 0.0;             // > 0: ProbeSettings::window (mean diameters)
@@ -71,6 +72,7 @@ CampaignSettings campaign_settings(const ProbeOptions& o, const Packing& p) {
   s.sample = o.sample;
   s.seed = o.seed;
   s.nlgs.g = s.kinematic.g = o.g;
+  s.kinematic.lp_tolerance = o.lp_tol;
   s.nlgs.dt = o.dt > 0.0 ? o.dt : default_probe_dt(s.method, o.g);
   s.nlgs.velocity_tol = o.velocity_tol;
   s.nlgs.max_sweeps = o.max_sweeps;
@@ -453,9 +455,12 @@ void run_all(const ProbeOptions& o, const Packing& p, const CampaignSettings& s,
   char floor[64] = "";
   if (s.cd.restart_floor > 0.0)  // the continuation only (validate)
     std::snprintf(floor, sizeof floor, ", no restart below compliance %g", s.cd.restart_floor);
-  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s%s%s, %d threads%s\n", total,
-               o.dir.c_str(), o.method.c_str(), window, budget, accept, settle, lost, floor, omp_get_max_threads(),
-               spread.c_str());
+  char lp_tol[48] = "";
+  if (s.kinematic.lp_tolerance != KinematicProbeSettings{}.lp_tolerance)  // lp only (validate)
+    std::snprintf(lp_tol, sizeof lp_tol, ", LP tolerance %g", s.kinematic.lp_tolerance);
+  std::fprintf(stderr, "unjam probe: %d contacts of %s, method %s%s%s%s%s%s%s%s, %d threads%s\n", total,
+               o.dir.c_str(), o.method.c_str(), lp_tol, window, budget, accept, settle, lost, floor,
+               omp_get_max_threads(), spread.c_str());
   CheckpointedCampaignResult r;
   {
     const InterruptGuard interrupts;
@@ -818,6 +823,7 @@ void add_probe_command(CLI::App& app) {
                   "with --contact: write the probe step in Siconos' frictional contact problem format");
   cmd->add_option("--out", o->out, "output directory (default: the packing directory)");
   cmd->add_option("--g", o->g, "opening gap g (R_max)")->capture_default_str()->check(positive_number());
+  add_lp_tol_option(cmd, o->lp_tol, "lp: ");
   cmd->add_option("--dt", o->dt,
                   "nlgs, lemke, cd: time step of the probe (default: lemke, cd sqrt(g / 1e-5), the "
                   "quasi-static limit, 1e-2 at g = 1e-9; nlgs 1e-3)")

@@ -61,10 +61,14 @@ void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_to
       ->capture_default_str()->check(non_negative_number());
 }
 
-void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol) {
+void add_lp_tol_option(CLI::App* cmd, double& lp_tol, const std::string& applies) {
   cmd->add_option("--lp-tol", lp_tol,
-                  "CLP's primal and dual feasibility tolerance (docs/ensemble.md, \"The LP's tolerances\")")
+                  applies + "CLP's primal and dual feasibility tolerance (docs/ensemble.md, \"The LP's tolerances\")")
       ->capture_default_str()->check(positive_number() & CLI::Range(kMinLpTolerance, kMaxLpTolerance));
+}
+
+void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol) {
+  add_lp_tol_option(cmd, lp_tol);
   cmd->add_option("--open-tol", open_tol,
                   "a contact some admissible network loads with fn <= open-tol F0 can open: its fn_min is 0")
       ->capture_default_str()->check(positive_number() & CLI::Range(0.0, kMaxOpenTolF0));

@@ -15,9 +15,14 @@ CLI::Validator positive_number();       // finite, > 0
 // which contacts enter it (docs/ensemble.md, "Which contacts and rows enter").
 void add_contact_selection_options(CLI::App* cmd, double& gap_tol, double& fn_tol);
 
+// --lp-tol: ForceLP's tolerance in [kMinLpTolerance, kMaxLpTolerance] (lp/force_lp.hpp;
+// docs/ensemble.md, "The LP's tolerances"), for every command that solves the LP (bounds,
+// ensemble, probe --method lp); `applies` heads its help (e.g. "lp: ").
+void add_lp_tol_option(CLI::App* cmd, double& lp_tol, const std::string& applies = "");
+
 // --lp-tol and --open-tol of the commands that compute the force bounds (bounds, ensemble):
-// ForceBoundsOptions::tolerance in [kMinLpTolerance, kMaxLpTolerance] and open_tol_F0 in
-// (0, kMaxOpenTolF0] (ensemble/force_bounds.hpp; docs/ensemble.md, "The LP's tolerances").
+// add_lp_tol_option and ForceBoundsOptions::open_tol_F0 in (0, kMaxOpenTolF0]
+// (ensemble/force_bounds.hpp).
 void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol);
 
 }  // namespace unjam::cli

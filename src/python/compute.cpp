@@ -134,11 +134,12 @@ Packing relax(const Packing& from, double mu, double p_ext, int threads,
 // cd: the cd method's settings (`unjam probe --cd-*`), from unjam.CdSettings or the keywords.
 CampaignSettings probe_settings(const Packing& p, const std::string& method, double g,
                                 std::optional<double> dt, double velocity_tol, long long max_sweeps,
-                                const CdPathSettings& cd, std::optional<double> window) {
+                                const CdPathSettings& cd, std::optional<double> window, double lp_tol) {
   CampaignSettings s = campaign_settings_for(p);
   s.method = method_from_name(method);
   s.cd = cd;
   s.nlgs.g = s.kinematic.g = g;
+  s.kinematic.lp_tolerance = lp_tol;  // lp only (validate)
   s.nlgs.dt = dt ? *dt : default_probe_dt(s.method, g);
   s.nlgs.velocity_tol = velocity_tol;
   s.nlgs.max_sweeps = max_sweeps;
@@ -161,8 +162,8 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
                  std::optional<double> window, long long cd_max_pieces, double cd_interior_states_pieces,
                  int cd_interior_states_stall, int cd_interior_states_retries, int cd_interior_iterations,
                  double cd_interior_neighbourhood, double cd_compliant_start, double cd_accept_residual,
-                 std::optional<CdPathSettings> typed, int threads, std::optional<py::function> progress,
-                 double running_every) {
+                 std::optional<CdPathSettings> typed, double lp_tol, int threads,
+                 std::optional<py::function> progress, double running_every) {
   if (contact.has_value() == contacts.has_value()) throw Error("give exactly one of contact=K, contacts=[...]");
   const std::vector<int> list = contact ? std::vector<int>{*contact} : *contacts;
   CdPathSettings cd = cd_settings(cd_start, cd_compliant_start, cd_softer_starts, cd_max_pieces, cd_accept_residual,
@@ -173,7 +174,7 @@ py::object probe(const Packing& p, std::optional<int> contact, std::optional<std
       throw Error("give the cd settings either as cd=unjam.CdSettings(...) or as cd_* keywords, not both");
     cd = *typed;
   }
-  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window);
+  CampaignSettings s = probe_settings(p, method, g, dt, velocity_tol, max_sweeps, cd, window, lp_tol);
   std::vector<ProbeResult> results;
   SignalPoll poll;
   if (!(running_every >= 0.0)) throw Error("running_every must be >= 0 seconds");
@@ -245,6 +246,7 @@ py::dict campaign_settings(const Packing& p, const std::filesystem::path& path) 
   d["dt"] = lp ? py::none() : py::cast(s.nlgs.dt);
   d["cd"] = py::cast(s.cd);
   d["window"] = s.nlgs.window > 0.0 ? py::cast(s.nlgs.window) : py::none();
+  d["lp_tol"] = s.kinematic.lp_tolerance;
   d["velocity_tol"] = s.nlgs.velocity_tol;
   d["max_sweeps"] = s.nlgs.max_sweeps;
   d["max_inertia"] = s.max_inertia;
@@ -538,7 +540,7 @@ void bind_compute(py::module_& m) {
         py::arg("cd_interior_neighbourhood") = cd.cd.interior_neighbourhood,
         py::arg("cd_compliant_start") = cd.cd.compliant_start,
         py::arg("cd_accept_residual") = cd.cd.accept_residual, py::arg("cd") = py::none(),
-        py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("running_every") = kRunningEverySeconds,
+        py::arg("lp_tol") = cd.kinematic.lp_tolerance, py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("running_every") = kRunningEverySeconds,
         "probe contact=K (a ProbeResult) or contacts=[...] (a list, probed in parallel on `threads` "
         "threads, 0: all cores; the same results for any count), as `unjam probe --contact K`; "
         "dt=None: the method's default (lemke, cd: sqrt(g / 1e-5), the quasi-static limit; nlgs: 1e-3); "
@@ -560,7 +562,8 @@ void bind_compute(py::module_& m) {
         "a cd probe stops at a near-exact solution instead of searching on for an exact one, as `unjam probe "
         "--cd-accept-residual` (docs/probe.md, \"Accepting a near-exact solution\"); cd: all of the cd method's "
         "settings as one unjam.CdSettings (its start included), instead of the cd_* keywords, which must then "
-        "be left at their defaults; progress: a callable given a dict with event 'finished' once per "
+        "be left at their defaults; lp_tol: lp: the LP's tolerance, as `unjam probe --lp-tol` (docs/ensemble.md, "
+        "\"The LP's tolerances\"); progress: a callable given a dict with event 'finished' once per "
         "finished probe, in the order they finish (index: the position in contacts, contact, result: its "
         "ProbeResult, done, total, elapsed_s, eta_s; keep the results it is given: Ctrl-C raises "
         "KeyboardInterrupt and returns nothing), and with event 'running' every running_every seconds of "
@@ -571,9 +574,9 @@ void bind_compute(py::module_& m) {
         "the settings of a campaign of `unjam probe --all` or `--sample K` on this packing, read from its "
         "probe_summary.json or probe_checkpoint.json (path): a dict with method, g, dt (None for lp), cd "
         "(an unjam.CdSettings, the tool's defaults where the method is not cd), window (None: the whole "
-        "packing), velocity_tol, max_sweeps, max_inertia (F0), displacement, force_threshold (F0), sample "
+        "packing), lp_tol, velocity_tol, max_sweeps, max_inertia (F0), displacement, force_threshold (F0), sample "
         "and seed; unjam.probe(packing, contact=K, method=d['method'], g=d['g'], dt=d['dt'], cd=d['cd'], "
-        "window=d['window']) probes contact K as the campaign did. Raises unjam.Error for a record the "
+        "window=d['window'], lp_tol=d['lp_tol']) probes contact K as the campaign did. Raises unjam.Error for a record the "
         "tool would not have written on this packing");
   m.def("bounds", &bounds, py::arg("packing"), py::kw_only(), py::arg("gap_tol") = 1e-9,
         py::arg("fn_tol") = 1e-9, py::arg("threads") = 0, py::arg("method") = "barrier",

@@ -97,6 +97,9 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
   s.nlgs.g = s.kinematic.g = in.probe_g;
   s.nlgs.dt = in.probe_dt > 0.0 ? in.probe_dt : default_probe_dt(s.method, in.probe_g);
   s.nlgs.velocity_tol = in.probe_velocity_tol;
+  // The lp probe's LP at the intervals' tolerance: its F_crit is their fn_max where the sets
+  // agree (docs/ensemble.md, "The LP's tolerances").
+  if (s.method == ProbeMethod::kLp) s.kinematic.lp_tolerance = in.lp_tol;
   return s;  // P_ext: the nlgs probe takes the packing's own (probe/nlgs_probe)
 }
 

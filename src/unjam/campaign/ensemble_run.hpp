@@ -45,8 +45,9 @@ struct EnsembleSettings {
   double gap_tol = 1e-9;          // admissible set: touching, gap < gap_tol (R_max) ...
   double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
   // The LP intervals' tolerances, ForceBoundsOptions::tolerance and ::open_tol_F0 (F0), with
-  // their ranges (ensemble/force_bounds.hpp; docs/ensemble.md, "The LP's tolerances"); the
-  // samplers and F_crit's place t read those intervals.
+  // their ranges (lp/force_lp.hpp, ensemble/force_bounds.hpp; docs/ensemble.md, "The LP's
+  // tolerances"); the samplers and F_crit's place t read those intervals, and the lp probe's
+  // LP takes lp_tol too.
   double lp_tol = ForceBoundsOptions{}.tolerance;
   double open_tol = ForceBoundsOptions{}.open_tol_F0;
   int threads = 0;                // LP bounds and probes; 0: omp_get_max_threads()
@@ -93,8 +94,8 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
 
 // The probes' settings: the packing's own contact model (touch gap and bath mass from its
 // metadata, as `unjam probe` takes them: campaign_settings_for) with the ensemble's opening
-// g, time step (0: the method's default_probe_dt) and NLGS tolerance, and `method` (a name
-// of method_from_name).
+// g, time step (0: the method's default_probe_dt), NLGS tolerance and, for lp, LP tolerance
+// (lp_tol), and `method` (a name of method_from_name).
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
                                          const std::string& method);
 

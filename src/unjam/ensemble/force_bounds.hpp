@@ -18,9 +18,6 @@ namespace unjam {
 
 struct ForceBounds;
 
-// The range of ForceBoundsOptions::tolerance, the range measured (docs/ensemble.md, "The LP's
-// tolerances"): below it CLP's barrier ends LPs "optimal" at wrong points (at 1e-13 on p50).
-inline constexpr double kMinLpTolerance = 1e-12, kMaxLpTolerance = 1e-6;
 // The largest ForceBoundsOptions::open_tol_F0: a contact carrying 1e-3 F0 is not open.
 inline constexpr double kMaxOpenTolF0 = 1e-3;
 
@@ -28,8 +25,8 @@ struct ForceBoundsOptions {
   int threads = 1;                  // OpenMP threads, one ForceLP copy each
   LpMethod method = LpMethod::barrier;
   // CLP's primal and dual feasibility tolerance (absolute, on the scaled model; see ForceLP).
-  // 1e-9 is the tested value; allowed: [kMinLpTolerance, kMaxLpTolerance] (docs/ensemble.md,
-  // "The LP's tolerances").
+  // 1e-9 is the tested value; allowed: [kMinLpTolerance, kMaxLpTolerance] (lp/force_lp.hpp;
+  // docs/ensemble.md, "The LP's tolerances").
   double tolerance = 1e-9;
   bool keep_networks_at_max = false;  // store the argmax network of every contact
   // A contact with fn <= open_tol_F0 F0 in an admissible network can open: its fn_min is 0.

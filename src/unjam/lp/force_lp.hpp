@@ -88,6 +88,11 @@ struct SimplexBasis {
 // start.
 bool has_admissible_network(const EquilibriumSystem& system, double tolerance, SimplexBasis& basis);
 
+// The range of ForceLP's tolerance the commands accept, the range measured (docs/ensemble.md,
+// "The LP's tolerances"): below it CLP's barrier ends LPs "optimal" at wrong points (at 1e-13
+// on p50).
+inline constexpr double kMinLpTolerance = 1e-12, kMaxLpTolerance = 1e-6;
+
 // The LP over the admissible set of one system, re-solved for one objective after another.
 // Copyable: each copy owns its own CLP models and bases (one per thread).
 class ForceLP {

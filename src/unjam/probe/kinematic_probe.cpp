@@ -16,7 +16,7 @@ KinematicProbe::KinematicProbe(const Packing& packing, const KinematicProbeSetti
       settings_(settings),
       model_(contact_model_of(packing, settings.model)),
       system_(admissible_system(packing, model_)),
-      lp_(system_, settings.method),
+      lp_(system_, settings.method, settings.lp_tolerance),
       system_index_(packing.contacts.size(), -1),
       inverse_mass_(inverse_masses(packing, system_, model_)) {
   for (int k = 0; k < system_.num_contacts(); ++k) system_index_[system_.contacts[k]] = k;

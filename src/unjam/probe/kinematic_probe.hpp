@@ -31,6 +31,10 @@ struct KinematicProbeSettings {
   double g = 1e-9;            // prescribed opening (R_max)
   double state_tol = 1e-7;    // (units of F0) open: fn <= tol; sliding: mu fn - |ft| <= tol
   LpMethod method = LpMethod::barrier;
+  // ForceLP's tolerance (CLP's primal and dual feasibility tolerance), in [kMinLpTolerance,
+  // kMaxLpTolerance] (lp/force_lp.hpp; docs/ensemble.md, "The LP's tolerances"): the same LP
+  // as `unjam bounds --lp-tol`, so F_crit is its fn_max at the same tolerance.
+  double lp_tolerance = 1e-9;
   // Active-set updates after the first solve (solve_active_set, core/least_norm.hpp).
   int max_rounds = 50;
   // mu, P_ext, M_lambda (weight of the cell strain in the kinetic energy) and touch_gap (pairs

@@ -259,6 +259,14 @@ void validate(const CampaignSettings& s) {
     throw Error("the probe's g, dt and velocity_tol must be positive");
   if (!(s.max_inertia >= 0.0 && std::isfinite(s.max_inertia)))
     throw Error("the largest inertia of a probe that enters the averages must be >= 0 and finite (in F0)");
+  if (!(s.kinematic.lp_tolerance >= kMinLpTolerance && s.kinematic.lp_tolerance <= kMaxLpTolerance)) {
+    char why[96];
+    std::snprintf(why, sizeof why, "--lp-tol must be in [%g, %g] (got %g)", kMinLpTolerance, kMaxLpTolerance,
+                  s.kinematic.lp_tolerance);
+    throw Error(why);
+  }
+  if (s.kinematic.lp_tolerance != KinematicProbeSettings{}.lp_tolerance && s.method != ProbeMethod::kLp)
+    throw Error(std::string("--lp-tol applies to the lp method, not to ") + method_name(s.method));
   if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
     throw Error("a largest inertia applies to the methods with a time step (nlgs, lemke, cd), not to lp");
   validate(s.cd);
@@ -566,6 +574,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
   if (lp) {
     j["state_tol_F0"] = s.kinematic.state_tol;
     j["M_lambda"] = model->M_lambda;
+    // recorded where it is not the default, so that earlier checkpoints still resume
+    if (s.kinematic.lp_tolerance != KinematicProbeSettings{}.lp_tolerance) j["lp_tolerance"] = s.kinematic.lp_tolerance;
   } else {
     j["dt"] = s.nlgs.dt;
     j["M_lambda"] = model->M_lambda;
@@ -621,7 +631,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
   if (!j.is_object()) throw Error(name + " are not a JSON object");
   static const std::set<std::string> kKnown = {
       "method", "g", "touch_gap", "displacement", "force_threshold_F0", "sample", "seed", "state_tol_F0",
-      "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
+      "lp_tolerance", "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
       "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
       "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
       "cd_lost_factor", "cd_restart_floor", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
@@ -640,6 +650,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
     s.seed = json_integer<std::uint64_t>(j.at("seed"), "seed");
     if (s.method == ProbeMethod::kLp) {
       s.kinematic.state_tol = j.at("state_tol_F0").get<double>();
+      s.kinematic.lp_tolerance = j.value("lp_tolerance", KinematicProbeSettings{}.lp_tolerance);
       s.nlgs.dt = default_probe_dt(s.method, s.nlgs.g);
     } else {
       s.nlgs.dt = j.at("dt").get<double>();
