@@ -162,5 +162,31 @@ TEST(EnsembleRun, NoProbeAndQuantiles) {
   EXPECT_EQ(c.within_5_percent, 4);
 }
 
+TEST(EnsembleRun, ShouldStopCancelsEachStageAndANeverStoppingPollChangesNothing) {
+  // EnsembleSettings::should_stop is polled by the LPs, after every sample of both samplers and
+  // by the probes: answering true at its n-th call (n = 1: during the LPs; later: the samplers,
+  // then the probes) throws Cancelled; a poll that never stops leaves every number as it was.
+  const Packing& p = fixture_p50();
+  EnsembleSettings s = lp_hit_and_run(1);
+  s.walk = true;
+  s.samples = 20;
+  const EnsembleReport whole = compute_ensemble(p, s);
+  long long polls = 0;
+  s.should_stop = [&polls] { return ++polls < 0; };  // never
+  const EnsembleReport polled = compute_ensemble(p, s);
+  EXPECT_GE(polls, 40) << "polled after each of the 20 + 20 samples at least";
+  EXPECT_EQ(polled.bounds.fn_max, whole.bounds.fn_max);
+  EXPECT_EQ(polled.hr_columns->mean, whole.hr_columns->mean);
+  EXPECT_EQ(polled.walk_columns->mean, whole.walk_columns->mean);
+  EXPECT_EQ(polled.f_crit_over_fn_max, whole.f_crit_over_fn_max);
+  for (const long long n : {1LL, polls / 2, polls}) {
+    long long calls = 0;
+    s.should_stop = [&calls, n] { return ++calls >= n; };
+    EXPECT_THROW(compute_ensemble(p, s), Cancelled) << "stopped at poll " << n << " of " << polls;
+    // Nothing runs after the stop; the LPs' second phase polls once more, handing out nothing.
+    EXPECT_LE(calls, n + 1) << "polled on after the stop";
+  }
+}
+
 }  // namespace
 }  // namespace unjam

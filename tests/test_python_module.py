@@ -814,12 +814,65 @@ def interrupted(code):
     # one nlgs probe of 1e7 sweeps (~30 s of CPU), abandoned inside (ProbeSettings::cancel)
     (f"p = unjam.read_packing({FIXTURE!r})",
      "unjam.probe(p, contact=3, method='nlgs', velocity_tol=1e-14, max_sweeps=10000000, threads=1)"),
+    # ensemble: in the hit-and-run sampler, in the random walk, inside its nlgs probes
+    (f"p = unjam.read_packing({FIXTURE!r})", "unjam.ensemble(p, method='hit-and-run', probe='none', samples=10**9)"),
+    (f"p = unjam.read_packing({FIXTURE!r})", "unjam.ensemble(p, method='walk', probe='none', samples=10**8)"),
+    (f"p = unjam.read_packing({FIXTURE!r})",
+     "unjam.ensemble(p, method='hit-and-run', samples=10, probe='nlgs', probe_velocity_tol=1e-14, threads=1)"),
 ])
 def test_ctrl_c_stops_a_long_call(setup, call):
     seconds, rc, out, err = interrupted(
         f"import unjam\n{setup}\nprint('ready', flush=True)\n{call}\nprint('done', flush=True)\n")
     assert seconds < 5.0 and rc != 0 and "done" not in out
     assert "KeyboardInterrupt" in err and "line 4" in err  # in the call
+
+
+def test_ensemble_equals_tool_bit_for_bit(tmp_path):
+    """unjam.ensemble: the tool's ensemble.csv, its samples and ensemble.json's numbers, bit for
+    bit, from the same seed; its progress and bad arguments."""
+    d = tmp_path / "p"
+    tool("pack", "--n", 30, "--mu", 0.2, "--seed", 4, "--out", d, "--quiet")
+    tool("ensemble", d, "--samples", 400, "--seed", 7, "--probe", "cd", "--threads", 2, "--write-samples")
+    p = unjam.read_packing(d)
+    steps = []
+    e = unjam.ensemble(p, samples=400, seed=7, probe="cd", threads=1, keep_samples=True, progress=steps.append)
+    rows = read_csv(d / "ensemble.csv")
+    assert len(rows) == len(e["a"]) > 0 and e["contact"].dtype == np.int32
+    for name in rows[0]:
+        if name == "f_crit_method":
+            continue
+        unprobed = {"probe_sweeps": -1.0, "probe_converged": 0.0}.get(name, float("nan"))  # the module's marks
+        want = [float(x[name]) if x[name] != "" else unprobed for x in rows]
+        got = np.asarray(e[name], dtype=float).tolist()
+        assert np.array_equal(np.array(got), np.array(want), equal_nan=True), name
+    probed = ~np.isnan(e["f_crit"])
+    assert probed.sum() == sum(x["f_crit_method"] == "cd" for x in rows) > 0
+    assert np.all(e["fn"][probed] > 1e-9 * e["F0"]) and e["probe_converged"][probed].all()
+    samples = read_csv(d / "ensemble-samples.csv")
+    assert e["samples_fn"].shape == (400, len(rows))
+    assert e["samples_fn"].tolist() == [[float(v) for v in s.values()] for s in samples]
+    j = json.loads((d / "ensemble.json").read_text())
+    for m in ("hit_and_run", "walk"):
+        for k in ("eta", "mean_fn", "mean_coverage_of_lp_width", "samples"):
+            assert e["methods"][m][k] == j["methods"][m][k], (m, k)
+    assert e["probe"]["f_crit_over_fn_max"] == j["probe"]["f_crit_over_fn_max"]
+    assert e["probe"]["position_in_interval"] == j["probe"]["position_in_interval"]
+    assert e["parameters"] == j["parameters"] and (e["mu"], e["F0"], e["seed"]) == (0.2, j["F0"], 7)
+    assert {s["what"] for s in steps} == {"random walk (steps)", "probe cd (contacts)"}
+    assert steps[-1]["done"] == steps[-1]["total"] == probed.sum()
+    # One sampler, no probe: only its columns.
+    h = unjam.ensemble(p, method="hit-and-run", probe="none", samples=50)
+    assert "walk_mean" not in h and "f_crit" not in h and "samples_fn" not in h and h["probe"] == {"method": "none"}
+    with pytest.raises(RuntimeError, match="enough"):
+        unjam.ensemble(p, method="walk", probe="none", samples=10**6,
+                       progress=lambda s: (_ for _ in ()).throw(RuntimeError("enough")))
+    for bad, match in [(dict(method="gibbs"), "method must be hit-and-run, walk or both"),
+                       (dict(probe="lemke"), "probe must be nlgs, lp, cd or none"),
+                       (dict(probe="simplex"), "simplex"), (dict(samples=0), "samples must be >= 1"),
+                       (dict(lp_tol=1e-13), "LP tolerance"), (dict(open_tol=0.0), "open tolerance"),
+                       (dict(walk_tol=float("nan")), "walk_tol"), (dict(threads=-1), "threads")]:
+        with pytest.raises(unjam.Error, match=match):
+            unjam.ensemble(p, **{"samples": 10, **bad})
 
 
 def test_ctrl_c_of_a_probe_list_keeps_what_progress_was_given(tmp_path):

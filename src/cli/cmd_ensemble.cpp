@@ -99,68 +99,6 @@ std::string ensemble_csv(const Packing& packing, const EnsembleReport& r) {
   return csv.str();
 }
 
-// ensemble.json's "methods": eta, coverage and the counts of each sampler.
-nlohmann::ordered_json methods_json(const EnsembleSettings& s, const EnsembleReport& r) {
-  nlohmann::ordered_json methods = nlohmann::ordered_json::object();
-  if (const auto& h = r.hit_and_run)
-    methods["hit_and_run"] = {{"description", "hit-and-run, uniform on the admissible polytope"},
-                              {"eta", h->eta},
-                              {"mean_fn", h->mean_fn},
-                              {"mean_coverage_of_lp_width", r.hr_columns->coverage},
-                              {"samples", h->samples},
-                              {"steps", h->steps},
-                              {"dimension", h->dimension},
-                              {"contacts_open_in_every_network", h->fixed_open},
-                              {"start_depth", h->start_depth},
-                              {"thin", s.thin},
-                              {"burn_in", s.burn_in},
-                              {"seconds", r.hr_columns->seconds}};
-  if (const auto& w = r.walk)
-    methods["walk"] = {{"description", "random walk: kicks U(-a, a) on fn and ft, a = kick <F_n>, relaxed "
-                                       "by the static contact-dynamics solve"},
-                       {"eta", w->eta},
-                       {"mean_fn", w->mean_fn},
-                       {"mean_coverage_of_lp_width", r.walk_columns->coverage},
-                       {"samples", w->samples},
-                       {"failures", w->failures},
-                       {"kick", s.kick},
-                       {"kick_amplitude", w->kick_amplitude},
-                       {"solve_tol_F0", s.walk_tol},
-                       {"nlgs_sweeps", w->sweeps},
-                       {"seconds", r.walk_columns->seconds}};
-  return methods;
-}
-
-// ensemble.json's "probe": the method, and F_crit / fn_max over the probed contacts.
-nlohmann::ordered_json probe_json(const EnsembleSettings& s, const EnsembleReport& r) {
-  nlohmann::ordered_json j = {{"method", r.probe}};
-  if (r.probe == "none") return j;
-  const std::vector<double>& ratio = r.f_crit_over_fn_max;
-  j["contacts_probed"] = ratio.size();
-  j["unconverged"] = r.unconverged;
-  j["settings"] = {{"g", s.probe_g}, {"dt", r.probe_dt}, {"threads", s.threads}};
-  if (r.probe == "nlgs") j["settings"]["velocity_tol_g_per_dt"] = s.probe_velocity_tol;
-  if (r.probe == "cd") j["settings"]["start"] = cd_start_name(CdPathSettings{}.start);  // the default
-  if (!ratio.empty()) {
-    const CriticalForceRatio c = critical_force_ratio(ratio);
-    j["f_crit_over_fn_max"] = {{"min", c.min},
-                               {"median", c.median},
-                               {"max", c.max},
-                               {"within_1_percent", c.within_1_percent},
-                               {"within_2_percent", c.within_2_percent},
-                               {"within_5_percent", c.within_5_percent}};
-  }
-  const std::vector<double>& t = r.f_crit_position;
-  if (!t.empty())
-    j["position_in_interval"] = {
-        {"min", quantile(t, 0.0)},
-        {"median", quantile(t, 0.5)},
-        {"at_top", std::count_if(t.begin(), t.end(), [](double x) { return x >= 0.99; })}};
-  j["below_f_cont"] = r.below_f_cont;
-  j["seconds"] = r.probe_seconds;
-  return j;
-}
-
 void print_summary(const EnsembleSettings& s, const EnsembleReport& r, const nlohmann::ordered_json& j) {
   std::printf("contacts %d, samples %d (seed %llu)\n", r.system.num_contacts(), s.samples,
               static_cast<unsigned long long>(s.seed));
@@ -220,8 +158,8 @@ void run_ensemble(const EnsembleOptions& opt) {
       {"contacts_used", r.system.num_contacts()},
       {"samples", s.samples},
       {"seed", s.seed},
-      {"methods", methods_json(s, r)},
-      {"probe", probe_json(s, r)},
+      {"methods", ensemble_methods_json(s, r)},
+      {"probe", ensemble_probe_json(s, r)},
       {"parameters", {{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol},
                       {"lp_tolerance", s.lp_tol}, {"open_tol_F0", s.open_tol}}},
       {"timings_s", {{"lp", r.bounds.seconds}, {"total", seconds_since(t_start)}}},

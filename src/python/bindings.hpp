@@ -10,11 +10,13 @@
 #include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include <pybind11/pybind11.h>
 
 namespace unjam {
 struct CdPathSettings;
+struct Packing;
 }
 
 namespace unjam::python {
@@ -23,6 +25,7 @@ namespace py = pybind11;
 
 void bind_packing(py::module_& m);
 void bind_compute(py::module_& m);
+void bind_ensemble(py::module_& m);     // unjam.ensemble (python/ensemble.cpp)
 void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute (its default)
 // The cd method's settings from the values of unjam.probe's cd_* keywords, the other fields at
 // their defaults (settle_compliance, lost_factor and restart_floor are set through
@@ -30,6 +33,9 @@ void bind_cd_settings(py::module_& m);  // unjam.CdSettings, before bind_compute
 CdPathSettings cd_settings(const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                            double accept_residual, double interior_states_pieces, int interior_states_stall,
                            int interior_states_retries, int interior_iterations, double interior_neighbourhood);
+// The columns every per-contact result starts with: contact (the index into packing.contacts),
+// a, b and the packing's fn of each listed contact, as arrays in the listed order.
+py::dict contact_columns(const Packing& p, const std::vector<int>& contacts);
 // a and b equal in the fields unjam.CdSettings shows.
 bool same_cd_fields(const CdPathSettings& a, const CdPathSettings& b);
 

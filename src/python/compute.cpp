@@ -327,20 +327,7 @@ py::dict bounds(const Packing& p, double gap_tol, double fn_tol, int threads, co
   report.rethrow_if_failed();
   poll.rethrow_if_interrupted();
   const int Nc = sys->num_contacts();
-  py::array_t<int> contact(Nc), a(Nc), bb(Nc);
-  py::array_t<double> fn(Nc);
-  for (int k = 0; k < Nc; ++k) {
-    const Contact& c = p.contacts[sys->contacts[k]];
-    contact.mutable_at(k) = sys->contacts[k];
-    a.mutable_at(k) = c.a;
-    bb.mutable_at(k) = c.b;
-    fn.mutable_at(k) = c.fn;
-  }
-  py::dict d;
-  d["contact"] = contact;
-  d["a"] = a;
-  d["b"] = bb;
-  d["fn"] = fn;
+  py::dict d = contact_columns(p, sys->contacts);
   d["fn_min"] = py::array_t<double>(Nc, b.fn_min.data());
   d["fn_max"] = py::array_t<double>(Nc, b.fn_max.data());
   d["dimension"] = rank.dimension;

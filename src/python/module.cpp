@@ -1,7 +1,10 @@
 // PYBIND11_MODULE(unjam): the library's types and calls for Python (README, "Python").
 #include <omp.h>
 
+#include <pybind11/numpy.h>
+
 #include "python/bindings.hpp"
+#include "unjam/packing/packing.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/core/version.hpp"
 
@@ -29,6 +32,25 @@ ThreadCount::ThreadCount(int threads) : previous_(omp_get_max_threads()) {
 
 ThreadCount::~ThreadCount() { omp_set_num_threads(previous_); }
 
+py::dict contact_columns(const Packing& p, const std::vector<int>& contacts) {
+  const auto n = static_cast<py::ssize_t>(contacts.size());
+  py::array_t<int> contact(n), a(n), b(n);
+  py::array_t<double> fn(n);
+  for (py::ssize_t k = 0; k < n; ++k) {
+    const Contact& c = p.contacts[contacts[k]];
+    contact.mutable_at(k) = contacts[k];
+    a.mutable_at(k) = c.a;
+    b.mutable_at(k) = c.b;
+    fn.mutable_at(k) = c.fn;
+  }
+  py::dict d;
+  d["contact"] = contact;
+  d["a"] = a;
+  d["b"] = b;
+  d["fn"] = fn;
+  return d;
+}
+
 }  // namespace unjam::python
 
 PYBIND11_MODULE(unjam, m) {
@@ -43,4 +65,5 @@ PYBIND11_MODULE(unjam, m) {
   unjam::python::bind_packing(m);
   unjam::python::bind_cd_settings(m);
   unjam::python::bind_compute(m);
+  unjam::python::bind_ensemble(m);
 }

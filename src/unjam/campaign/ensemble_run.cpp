@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "unjam/core/error.hpp"
 #include "unjam/probe/probe_campaign.hpp"
 
 namespace unjam {
@@ -44,7 +45,8 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
       todo.push_back(k);
       contacts.push_back(sys.contacts[k]);
     }
-  const CampaignSettings s = ensemble_probe_settings(packing, in, r.probe);
+  CampaignSettings s = ensemble_probe_settings(packing, in, r.probe);
+  s.nlgs.cancel = in.should_stop;  // inside a running probe (nlgs, cd)
   r.probe_dt = s.method == ProbeMethod::kLp ? 0.0 : s.nlgs.dt;
   const std::string what = "probe " + r.probe + " (contacts)";
   const auto t0 = std::chrono::steady_clock::now();
@@ -53,6 +55,7 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
   std::vector<ProbeResult> results;
   try {
     ProbeListHooks hooks;
+    hooks.should_stop = in.should_stop;  // before each probe
     hooks.progress = [&](const FinishedProbe& f) {
       if (in.progress) in.progress(what, f.done, f.total);
     };
@@ -62,6 +65,7 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
     throw;
   }
   omp_set_num_threads(saved);
+  if (results.size() < contacts.size()) throw Cancelled();  // stopped before the last probe
   r.probe_seconds = seconds_since(t0);
   r.probes.resize(sys.num_contacts());
   for (std::size_t i = 0; i < results.size(); ++i) r.probes[todo[i]] = results[i];
@@ -114,14 +118,21 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   lp.threads = threads;
   lp.tolerance = in.lp_tol;
   lp.open_tol_F0 = in.open_tol;
+  lp.should_stop = in.should_stop;
   r.bounds = compute_force_bounds(sys, lp);
+  if (!r.bounds.complete) throw Cancelled();
+  // Every hit-and-run sample: the caller's on_sample, then the stop poll.
+  const auto each_sample = [&in](const ForceNetwork& net) {
+    if (in.on_sample) in.on_sample(net);
+    if (in.should_stop && in.should_stop()) throw Cancelled();
+  };
   if (in.hit_and_run) {
     HitAndRunOptions hr;
     hr.samples = in.samples;
     hr.seed = in.seed;
     hr.thin = in.thin;
     hr.burn_in = in.burn_in;
-    hr.on_sample = in.on_sample;
+    hr.on_sample = each_sample;
     const auto t = std::chrono::steady_clock::now();
     r.hit_and_run = sample_hit_and_run(sys, r.bounds, hr);
     r.hr_columns = columns(*r.hit_and_run, r.bounds, sys.F0, seconds_since(t));
@@ -133,13 +144,77 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
     walk.kick = in.kick;
     walk.tol = in.walk_tol;
     walk.model = ensemble_contact_model(packing, in);  // the model that selected the set
-    if (in.progress) walk.progress = [&in](int done, int total) { in.progress("random walk (steps)", done, total); };
+    if (in.progress || in.should_stop)
+      walk.progress = [&in](int done, int total) {  // after every step
+        if (in.progress) in.progress("random walk (steps)", done, total);
+        if (in.should_stop && in.should_stop()) throw Cancelled();
+      };
     const auto t = std::chrono::steady_clock::now();
     r.walk = sample_random_walk(packing, sys, walk);
     r.walk_columns = columns(*r.walk, r.bounds, sys.F0, seconds_since(t));
   }
   if (r.probe != "none") run_probes(packing, in, threads, r);
   return r;
+}
+
+nlohmann::ordered_json ensemble_methods_json(const EnsembleSettings& s, const EnsembleReport& r) {
+  nlohmann::ordered_json methods = nlohmann::ordered_json::object();
+  if (const auto& h = r.hit_and_run)
+    methods["hit_and_run"] = {{"description", "hit-and-run, uniform on the admissible polytope"},
+                              {"eta", h->eta},
+                              {"mean_fn", h->mean_fn},
+                              {"mean_coverage_of_lp_width", r.hr_columns->coverage},
+                              {"samples", h->samples},
+                              {"steps", h->steps},
+                              {"dimension", h->dimension},
+                              {"contacts_open_in_every_network", h->fixed_open},
+                              {"start_depth", h->start_depth},
+                              {"thin", s.thin},
+                              {"burn_in", s.burn_in},
+                              {"seconds", r.hr_columns->seconds}};
+  if (const auto& w = r.walk)
+    methods["walk"] = {{"description", "random walk: kicks U(-a, a) on fn and ft, a = kick <F_n>, relaxed "
+                                       "by the static contact-dynamics solve"},
+                       {"eta", w->eta},
+                       {"mean_fn", w->mean_fn},
+                       {"mean_coverage_of_lp_width", r.walk_columns->coverage},
+                       {"samples", w->samples},
+                       {"failures", w->failures},
+                       {"kick", s.kick},
+                       {"kick_amplitude", w->kick_amplitude},
+                       {"solve_tol_F0", s.walk_tol},
+                       {"nlgs_sweeps", w->sweeps},
+                       {"seconds", r.walk_columns->seconds}};
+  return methods;
+}
+
+nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& s, const EnsembleReport& r) {
+  nlohmann::ordered_json j = {{"method", r.probe}};
+  if (r.probe == "none") return j;
+  const std::vector<double>& ratio = r.f_crit_over_fn_max;
+  j["contacts_probed"] = ratio.size();
+  j["unconverged"] = r.unconverged;
+  j["settings"] = {{"g", s.probe_g}, {"dt", r.probe_dt}, {"threads", s.threads}};
+  if (r.probe == "nlgs") j["settings"]["velocity_tol_g_per_dt"] = s.probe_velocity_tol;
+  if (r.probe == "cd") j["settings"]["start"] = cd_start_name(CdPathSettings{}.start);  // the default
+  if (!ratio.empty()) {
+    const CriticalForceRatio c = critical_force_ratio(ratio);
+    j["f_crit_over_fn_max"] = {{"min", c.min},
+                               {"median", c.median},
+                               {"max", c.max},
+                               {"within_1_percent", c.within_1_percent},
+                               {"within_2_percent", c.within_2_percent},
+                               {"within_5_percent", c.within_5_percent}};
+  }
+  const std::vector<double>& t = r.f_crit_position;
+  if (!t.empty())
+    j["position_in_interval"] = {
+        {"min", quantile(t, 0.0)},
+        {"median", quantile(t, 0.5)},
+        {"at_top", std::count_if(t.begin(), t.end(), [](double x) { return x >= 0.99; })}};
+  j["below_f_cont"] = r.below_f_cont;
+  j["seconds"] = r.probe_seconds;
+  return j;
 }
 
 }  // namespace unjam

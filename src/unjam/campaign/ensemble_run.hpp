@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "unjam/contact/contact_problem.hpp"
 #include "unjam/contact/equilibrium_matrix.hpp"
@@ -52,6 +53,10 @@ struct EnsembleSettings {
   double open_tol = ForceBoundsOptions{}.open_tol_F0;
   int threads = 0;                // LP bounds and probes; 0: omp_get_max_threads()
   std::function<void(const ForceNetwork&)> on_sample;  // every hit-and-run sample; may be empty
+  // Polled by the LPs (ForceBoundsOptions::should_stop), after every sample of either sampler
+  // and by the probes (CampaignSettings' cancel, before and inside each); true: compute_ensemble
+  // throws Cancelled (nothing is kept). May be empty.
+  std::function<bool()> should_stop;
   // (what, done, total) as the walk and the probes go on; may be empty.
   std::function<void(const std::string&, int, int)> progress;
 };
@@ -106,5 +111,12 @@ struct CriticalForceRatio {
   int within_1_percent = 0, within_2_percent = 0, within_5_percent = 0;
 };
 CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio);  // ratio non-empty
+
+// ensemble.json's "methods" (docs/ensemble.md): per sampler run, its eta = <dF>/<|F|>, mean fn,
+// mean sampled / LP width and counts, with the settings that made it.
+nlohmann::ordered_json ensemble_methods_json(const EnsembleSettings& settings, const EnsembleReport& report);
+// ensemble.json's "probe": the method and, if one ran, its settings, F_crit / fn_max
+// (critical_force_ratio), F_crit's place t in its interval and the time.
+nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& settings, const EnsembleReport& report);
 
 }  // namespace unjam
