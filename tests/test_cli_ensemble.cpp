@@ -173,6 +173,43 @@ TEST_F(CliEnsemble, LpTolerancesGiveTheIntervalsOfBoundsAndAreRecorded) {
   EXPECT_EQ(pj["probe"]["f_crit_over_fn_max"]["max"].get<double>(), 1.0);
 }
 
+TEST_F(CliEnsemble, TheCdProbeTakesTheSettingsOfUnjamProbeAndRecordsThem) {
+  // --cd-start and the other --cd-* options reach the ensemble's cd probes: their F_crit is that
+  // of `unjam probe --all` with the same options, to the bit, and ensemble.json records the
+  // settings as the probe campaign does; the default records only its start.
+  const std::string cd = " --probe cd --cd-start interior --cd-max-pieces 4000";
+  testing::ToolRun r = run_tool("ensemble " + q(dir_) + " --samples 20 --method hit-and-run --threads 2" + cd);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = read_json_file(dir_ / "ensemble.json");
+  EXPECT_EQ(j["probe"]["settings"]["start"], "interior");
+  EXPECT_EQ(j["probe"]["settings"]["cd_max_pieces"], 4000);
+  const fs::path out = root_ / "all";
+  r = run_tool("probe " + q(dir_) + " --all --method cd --cd-start interior --cd-max-pieces 4000 --quiet --threads 2 --out " + q(out));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json campaign = read_json_file(out / "probe_summary.json")["settings"];
+  for (const auto& [key, value] : campaign.items())
+    if (key.rfind("cd_", 0) == 0 && key != "cd_start") EXPECT_EQ(j["probe"]["settings"][key], value) << key;
+  std::map<std::pair<std::int64_t, std::int64_t>, double> by_probe;
+  const CsvTable probes = CsvTable::read(out / "probes.csv");
+  for (std::size_t i = 0; i < probes.rows(); ++i)
+    by_probe[{probes.integer(i, probes.column("a")), probes.integer(i, probes.column("b"))}] =
+        probes.number(i, probes.column("f_crit"));
+  const CsvTable t = CsvTable::read(dir_ / "ensemble.csv");
+  int probed = 0;
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    if (t.field(i, t.column("f_crit")).empty()) continue;
+    ++probed;
+    const std::pair<std::int64_t, std::int64_t> ab{t.integer(i, t.column("a")), t.integer(i, t.column("b"))};
+    ASSERT_EQ(by_probe.count(ab), 1u);
+    EXPECT_EQ(t.number(i, t.column("f_crit")), by_probe.at(ab)) << ab.first << "-" << ab.second;
+  }
+  EXPECT_EQ(probed, 81);
+  ASSERT_EQ(run_tool("ensemble " + q(dir_) + " --samples 20 --method hit-and-run --probe cd").exit_code, 0);
+  const nlohmann::json d = read_json_file(dir_ / "ensemble.json")["probe"]["settings"];
+  EXPECT_EQ(d["start"], "static");
+  for (const auto& [key, value] : d.items()) EXPECT_NE(key.rfind("cd_", 0), 0u) << key << " recorded at its default";
+}
+
 // `unjam threshold` on p50-mu0.1 (its threshold is 0.048): the bracket in the JSON and the
 // report, the parameters and the command; continued from a bracket; bad brackets, options and
 // a missing packing are refused with nothing written.

@@ -860,6 +860,16 @@ def test_ensemble_equals_tool_bit_for_bit(tmp_path):
     assert e["parameters"] == j["parameters"] and (e["mu"], e["F0"], e["seed"]) == (0.2, j["F0"], 7)
     assert {s["what"] for s in steps} == {"random walk (steps)", "probe cd (contacts)"}
     assert steps[-1]["done"] == steps[-1]["total"] == probed.sum()
+    # The cd probe's settings as one unjam.CdSettings: the tool's --cd-* options.
+    tool("ensemble", d, "--samples", 10, "--method", "hit-and-run", "--probe", "cd", "--cd-start", "interior",
+         "--cd-max-pieces", 4000, "--threads", 2)
+    c = unjam.ensemble(p, samples=10, method="hit-and-run", probe="cd",
+                       cd=unjam.CdSettings(start="interior", max_pieces=4000))
+    assert np.array_equal(c["f_crit"], np.array([float(x["f_crit"] or "nan") for x in read_csv(d / "ensemble.csv")]),
+                          equal_nan=True)
+    assert c["probe"]["settings"]["start"] == "interior" and c["probe"]["settings"]["cd_max_pieces"] == 4000
+    with pytest.raises(unjam.Error, match="applies to the cd method, not to lp"):
+        unjam.ensemble(p, samples=10, probe="lp", cd=unjam.CdSettings(max_pieces=10))
     # One sampler, no probe: only its columns.
     h = unjam.ensemble(p, method="hit-and-run", probe="none", samples=50)
     assert "walk_mean" not in h and "f_crit" not in h and "samples_fn" not in h and h["probe"] == {"method": "none"}

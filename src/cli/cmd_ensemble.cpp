@@ -46,6 +46,7 @@ struct EnsembleOptions {
   std::string dir;
   std::string method = "both";  // hit-and-run | walk | both
   EnsembleSettings settings;    // the library's defaults; threads 0: all cores
+  std::string cd_start = "static";  // --cd-start: settings.probe_cd.start
   bool write_samples = false;
 };
 
@@ -129,7 +130,10 @@ void run_ensemble(const EnsembleOptions& opt) {
   s.threads = thread_count(s.threads);
   s.hit_and_run = opt.method != "walk";
   s.walk = opt.method != "hit-and-run";
+  s.probe_cd.start = cd_start_from_name(opt.cd_start);
   const Packing packing = read_packing(opt.dir);
+  // A probe setting that does not apply is refused before anything runs or is written.
+  if (const std::string m = ensemble_probe_method(packing, s); m != "none") ensemble_probe_settings(packing, s, m);
   const DirLock lock(opt.dir, command_line());
   std::optional<CsvWriter> samples_csv;  // --write-samples: fn of every hit-and-run sample
   if (opt.write_samples) {
@@ -182,6 +186,7 @@ void add_ensemble_command(CLI::App& app) {
                   "F_crit of every force-carrying contact: nlgs, lp, cd (the exact step) or none "
                   "(default: cd up to 200 contacts, else lp)")
       ->check(CLI::IsMember({"nlgs", "lp", "cd", "none"}));
+  add_cd_path_options(cmd, opt->settings.probe_cd, opt->cd_start);
   cmd->add_option("--samples", opt->settings.samples, "networks to sample (walk: steps)")
       ->capture_default_str()->check(positive_number());
   cmd->add_option("--seed", opt->settings.seed, "seed of both samplers")->capture_default_str()->check(seed_value());

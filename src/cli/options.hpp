@@ -5,6 +5,10 @@
 // >= 0, a tolerance or step a finite number > 0 (never nan or inf).
 #include <CLI/CLI.hpp>
 
+namespace unjam {
+struct CdPathSettings;
+}
+
 namespace unjam::cli {
 
 CLI::Validator seed_value();            // 0 .. 18446744073709551615
@@ -24,5 +28,10 @@ void add_lp_tol_option(CLI::App* cmd, double& lp_tol, const std::string& applies
 // add_lp_tol_option and ForceBoundsOptions::open_tol_F0 in (0, kMaxOpenTolF0]
 // (ensemble/force_bounds.hpp).
 void add_lp_tolerance_options(CLI::App* cmd, double& lp_tol, double& open_tol);
+
+// --cd-start (into `start`: a name of cd_start_from_name) and the other --cd-* options of the
+// exact probe (into `cd`'s fields; docs/probe.md), for every command that runs it (probe,
+// ensemble --probe cd).
+void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start);
 
 }  // namespace unjam::cli

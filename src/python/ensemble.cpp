@@ -21,6 +21,7 @@
 #include "unjam/campaign/ensemble_run.hpp"
 #include "unjam/core/error.hpp"
 #include "unjam/packing/packing.hpp"
+#include "unjam/probe/cd_path.hpp"
 
 namespace unjam::python {
 namespace {
@@ -39,7 +40,8 @@ py::object json_to_python(const nlohmann::ordered_json& j) {
 py::dict ensemble(const Packing& p, const std::string& method, const std::optional<std::string>& probe, int samples,
                   std::uint64_t seed, int thin, int burn_in, double kick, double walk_tol, double probe_g,
                   double probe_dt, double probe_velocity_tol, double gap_tol, double fn_tol, double lp_tol,
-                  double open_tol, int threads, bool keep_samples, std::optional<py::function> progress) {
+                  double open_tol, const std::optional<CdPathSettings>& cd, int threads, bool keep_samples,
+                  std::optional<py::function> progress) {
   if (method != "hit-and-run" && method != "walk" && method != "both")
     throw Error("method must be hit-and-run, walk or both (got '" + method + "')");
   if (probe && *probe != "none") method_from_name(*probe);  // nlgs, lp, cd (lemke refused below)
@@ -75,6 +77,7 @@ py::dict ensemble(const Packing& p, const std::string& method, const std::option
   s.fn_tol = fn_tol;
   s.lp_tol = lp_tol;
   s.open_tol = open_tol;
+  if (cd) s.probe_cd = *cd;  // refused unless the probe is cd (validate, before the LPs)
   s.threads = threads > 0 ? threads : omp_get_max_threads();  // recorded in "probe" as the tool does
   std::vector<double> kept;  // the hit-and-run samples' fn, row by row
   if (keep_samples && s.hit_and_run)
@@ -159,13 +162,14 @@ void bind_ensemble(py::module_& m) {
         py::arg("walk_tol") = e.walk_tol, py::arg("probe_g") = e.probe_g, py::arg("probe_dt") = e.probe_dt,
         py::arg("probe_velocity_tol") = e.probe_velocity_tol, py::arg("gap_tol") = e.gap_tol,
         py::arg("fn_tol") = e.fn_tol, py::arg("lp_tol") = e.lp_tol, py::arg("open_tol") = e.open_tol,
-        py::arg("threads") = 0, py::arg("keep_samples") = false, py::arg("progress") = py::none(),
+        py::arg("cd") = py::none(), py::arg("threads") = 0, py::arg("keep_samples") = false, py::arg("progress") = py::none(),
         "the ensemble of admissible force networks, as `unjam ensemble` (same seed, same numbers): a dict "
         "of arrays in the order of ensemble.csv (contact, a, b, fn, fn_min, fn_max; hr_min, hr_max, hr_mean, "
         "hr_std with method 'hit-and-run' or 'both'; walk_* with 'walk' or 'both'; f_crit (NaN where not "
         "probed), probe_converged, probe_sweeps (-1 where not probed) unless probe='none'), with ensemble.json's "
         "methods, probe and parameters as dicts, mu, F0, samples, seed and lp_seconds. probe: None (cd up to "
-        "200 contacts, else lp), 'nlgs', 'lp', 'cd' or 'none'; keep_samples: the fn of every hit-and-run "
+        "200 contacts, else lp), 'nlgs', 'lp', 'cd' or 'none'; cd: the cd probe's settings, an unjam.CdSettings "
+        "(`--cd-*`; e.g. start='interior' at 500 disks and more); keep_samples: the fn of every hit-and-run "
         "sample as samples_fn, a (samples, contacts) array (--write-samples); progress: a callable given a "
         "dict (what, done, total, elapsed_s) as the random walk's steps and the probes go on; an exception it "
         "raises stops the run and is raised. Ctrl-C stops it (KeyboardInterrupt; nothing is kept)");

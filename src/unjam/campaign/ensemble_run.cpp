@@ -13,6 +13,8 @@ namespace unjam {
 
 namespace {
 
+constexpr std::size_t kMaxContactsOfTheDefaultCdProbe = 200;  // EnsembleSettings::probe empty: cd up to it
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -45,7 +47,7 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
       todo.push_back(k);
       contacts.push_back(sys.contacts[k]);
     }
-  CampaignSettings s = ensemble_probe_settings(packing, in, r.probe);
+  CampaignSettings s = *r.probe_settings;
   s.nlgs.cancel = in.should_stop;  // inside a running probe (nlgs, cd)
   r.probe_dt = s.method == ProbeMethod::kLp ? 0.0 : s.nlgs.dt;
   const std::string what = "probe " + r.probe + " (contacts)";
@@ -101,18 +103,27 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
   s.nlgs.g = s.kinematic.g = in.probe_g;
   s.nlgs.dt = in.probe_dt > 0.0 ? in.probe_dt : default_probe_dt(s.method, in.probe_g);
   s.nlgs.velocity_tol = in.probe_velocity_tol;
+  s.cd = in.probe_cd;
   // The lp probe's LP at the intervals' tolerance: its F_crit is their fn_max where the sets
   // agree (docs/ensemble.md, "The LP's tolerances").
   if (s.method == ProbeMethod::kLp) s.kinematic.lp_tolerance = in.lp_tol;
+  validate(s);
   return s;  // P_ext: the nlgs probe takes the packing's own (probe/nlgs_probe)
+}
+
+std::string ensemble_probe_method(const Packing& packing, const EnsembleSettings& in) {
+  if (!in.probe.empty()) return in.probe;
+  const auto n = select_contacts(packing, ensemble_contact_model(packing, in), in.fn_tol).size();
+  return n <= kMaxContactsOfTheDefaultCdProbe ? "cd" : "lp";
 }
 
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {
   EnsembleReport r;
   r.system = admissible_system(packing, ensemble_contact_model(packing, in), in.fn_tol);
   const EquilibriumSystem& sys = r.system;
-  r.probe = !in.probe.empty() ? in.probe : sys.num_contacts() <= 200 ? "cd" : "lp";
-  if (r.probe != "none") method_from_name(r.probe);  // an unknown name is refused before the LPs
+  r.probe = ensemble_probe_method(packing, in);
+  // An unknown name or a setting that does not apply is refused before the LPs.
+  if (r.probe != "none") r.probe_settings = ensemble_probe_settings(packing, in, r.probe);
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
   ForceBoundsOptions lp;
   lp.threads = threads;
@@ -196,7 +207,12 @@ nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& s, const Ense
   j["unconverged"] = r.unconverged;
   j["settings"] = {{"g", s.probe_g}, {"dt", r.probe_dt}, {"threads", s.threads}};
   if (r.probe == "nlgs") j["settings"]["velocity_tol_g_per_dt"] = s.probe_velocity_tol;
-  if (r.probe == "cd") j["settings"]["start"] = cd_start_name(CdPathSettings{}.start);  // the default
+  if (r.probe == "cd") {  // its start, and its other settings as `unjam probe` records them where set
+    j["settings"]["start"] = cd_start_name(s.probe_cd.start);
+    const nlohmann::json recorded = to_json(*r.probe_settings);
+    for (const auto& [key, value] : recorded.items())
+      if (key.rfind("cd_", 0) == 0 && key != "cd_start") j["settings"][key] = value;
+  }
   if (!ratio.empty()) {
     const CriticalForceRatio c = critical_force_ratio(ratio);
     j["f_crit_over_fn_max"] = {{"min", c.min},

@@ -43,6 +43,9 @@ struct EnsembleSettings {
   // quasi-static sqrt(g / kQuasiStaticInertia)).
   double probe_dt = 0.0;
   double probe_velocity_tol = 1e-6;  // nlgs probe: max |dU| per sweep < this g / dt
+  // The cd probe's settings, its start included (`--cd-*`, probe/cd_path.hpp; docs/probe.md);
+  // other than the defaults only with the cd probe (validate(CampaignSettings) refuses them else).
+  CdPathSettings probe_cd;
   double gap_tol = 1e-9;          // admissible set: touching, gap < gap_tol (R_max) ...
   double fn_tol = 1e-9;           // ... or force-carrying, fn > fn_tol F0
   // The LP intervals' tolerances, ForceBoundsOptions::tolerance and ::open_tol_F0 (F0), with
@@ -75,6 +78,7 @@ struct EnsembleReport {
   std::optional<RandomWalkResult> walk;
   std::optional<SamplerReport> hr_columns, walk_columns;
   std::string probe;                  // the probe method used: nlgs, lp, cd or none
+  std::optional<CampaignSettings> probe_settings;  // its settings (ensemble_probe_settings); none: empty
   double probe_dt = 0.0;              // the time step the probes used (t0; lp: none, 0)
   std::vector<std::optional<ProbeResult>> probes;  // per contact of the system (force-carrying)
   std::vector<double> f_crit_over_fn_max;          // over the probed contacts, in system order
@@ -97,10 +101,15 @@ ContactModel ensemble_contact_model(const Packing& packing, const EnsembleSettin
 // name or LP tolerances out of their ranges (check_force_bounds_options) before any LP.
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& settings);
 
+// The probe method compute_ensemble runs: settings.probe, or where it is empty cd up to 200
+// contacts of the admissible set, else lp.
+std::string ensemble_probe_method(const Packing& packing, const EnsembleSettings& settings);
+
 // The probes' settings: the packing's own contact model (touch gap and bath mass from its
 // metadata, as `unjam probe` takes them: campaign_settings_for) with the ensemble's opening
-// g, time step (0: the method's default_probe_dt), NLGS tolerance and, for lp, LP tolerance
-// (lp_tol), and `method` (a name of method_from_name).
+// g, time step (0: the method's default_probe_dt), NLGS tolerance, cd settings (probe_cd) and,
+// for lp, LP tolerance (lp_tol), and `method` (a name of method_from_name); validated
+// (validate(CampaignSettings): throws unjam::Error naming a setting that does not apply).
 CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleSettings& settings,
                                          const std::string& method);
 
