@@ -164,8 +164,7 @@ void run_ensemble(const EnsembleOptions& opt) {
       {"seed", s.seed},
       {"methods", ensemble_methods_json(s, r)},
       {"probe", ensemble_probe_json(s, r)},
-      {"parameters", {{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol},
-                      {"lp_tolerance", s.lp_tol}, {"open_tol_F0", s.open_tol}}},
+      {"parameters", ensemble_parameters_json(s)},
       {"timings_s", {{"lp", r.bounds.seconds}, {"total", seconds_since(t_start)}}},
   };
   write_file_atomic(dir / "ensemble.json", j.dump(2) + "\n");

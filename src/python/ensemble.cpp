@@ -44,7 +44,7 @@ py::dict ensemble(const Packing& p, const std::string& method, const std::option
                   std::optional<py::function> progress) {
   if (method != "hit-and-run" && method != "walk" && method != "both")
     throw Error("method must be hit-and-run, walk or both (got '" + method + "')");
-  if (probe && *probe != "none") method_from_name(*probe);  // nlgs, lp, cd (lemke refused below)
+  // Another unknown name is refused by compute_ensemble before the LPs.
   if (probe && *probe == "lemke") throw Error("probe must be nlgs, lp, cd or none (got 'lemke')");
   const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   const auto non_negative = [](double v) { return v >= 0.0 && std::isfinite(v); };
@@ -146,8 +146,7 @@ py::dict ensemble(const Packing& p, const std::string& method, const std::option
   d["seed"] = s.seed;
   d["methods"] = json_to_python(ensemble_methods_json(s, r));
   d["probe"] = json_to_python(ensemble_probe_json(s, r));
-  d["parameters"] = json_to_python({{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol},
-                                    {"lp_tolerance", s.lp_tol}, {"open_tol_F0", s.open_tol}});
+  d["parameters"] = json_to_python(ensemble_parameters_json(s));
   d["lp_seconds"] = r.bounds.seconds;
   return d;
 }

@@ -81,6 +81,18 @@ void run_probes(const Packing& packing, const EnsembleSettings& in, int threads,
     }
 }
 
+// The probe of a set of `contacts` contacts: in.probe, or where it is empty cd up to
+// kMaxContactsOfTheDefaultCdProbe, else lp.
+std::string probe_method(const EnsembleSettings& in, std::size_t contacts) {
+  if (!in.probe.empty()) return in.probe;
+  return contacts <= kMaxContactsOfTheDefaultCdProbe ? "cd" : "lp";
+}
+
+// Throws Cancelled once in.should_stop (if any) says so.
+void stop_if_asked(const EnsembleSettings& in) {
+  if (in.should_stop && in.should_stop()) throw Cancelled();
+}
+
 }  // namespace
 
 CriticalForceRatio critical_force_ratio(const std::vector<double>& ratio) {
@@ -112,16 +124,14 @@ CampaignSettings ensemble_probe_settings(const Packing& packing, const EnsembleS
 }
 
 std::string ensemble_probe_method(const Packing& packing, const EnsembleSettings& in) {
-  if (!in.probe.empty()) return in.probe;
-  const auto n = select_contacts(packing, ensemble_contact_model(packing, in), in.fn_tol).size();
-  return n <= kMaxContactsOfTheDefaultCdProbe ? "cd" : "lp";
+  return probe_method(in, select_contacts(packing, ensemble_contact_model(packing, in), in.fn_tol).size());
 }
 
 EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& in) {
   EnsembleReport r;
   r.system = admissible_system(packing, ensemble_contact_model(packing, in), in.fn_tol);
   const EquilibriumSystem& sys = r.system;
-  r.probe = ensemble_probe_method(packing, in);
+  r.probe = probe_method(in, static_cast<std::size_t>(sys.num_contacts()));  // sys: select_contacts' set
   // An unknown name or a setting that does not apply is refused before the LPs.
   if (r.probe != "none") r.probe_settings = ensemble_probe_settings(packing, in, r.probe);
   const int threads = in.threads > 0 ? in.threads : omp_get_max_threads();
@@ -132,18 +142,17 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
   lp.should_stop = in.should_stop;
   r.bounds = compute_force_bounds(sys, lp);
   if (!r.bounds.complete) throw Cancelled();
-  // Every hit-and-run sample: the caller's on_sample, then the stop poll.
-  const auto each_sample = [&in](const ForceNetwork& net) {
-    if (in.on_sample) in.on_sample(net);
-    if (in.should_stop && in.should_stop()) throw Cancelled();
-  };
   if (in.hit_and_run) {
     HitAndRunOptions hr;
     hr.samples = in.samples;
     hr.seed = in.seed;
     hr.thin = in.thin;
     hr.burn_in = in.burn_in;
-    hr.on_sample = each_sample;
+    if (in.on_sample || in.should_stop)
+      hr.on_sample = [&in](const ForceNetwork& net) {  // after every sample
+        if (in.on_sample) in.on_sample(net);
+        stop_if_asked(in);
+      };
     const auto t = std::chrono::steady_clock::now();
     r.hit_and_run = sample_hit_and_run(sys, r.bounds, hr);
     r.hr_columns = columns(*r.hit_and_run, r.bounds, sys.F0, seconds_since(t));
@@ -158,7 +167,7 @@ EnsembleReport compute_ensemble(const Packing& packing, const EnsembleSettings& 
     if (in.progress || in.should_stop)
       walk.progress = [&in](int done, int total) {  // after every step
         if (in.progress) in.progress("random walk (steps)", done, total);
-        if (in.should_stop && in.should_stop()) throw Cancelled();
+        stop_if_asked(in);
       };
     const auto t = std::chrono::steady_clock::now();
     r.walk = sample_random_walk(packing, sys, walk);
@@ -208,7 +217,7 @@ nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& s, const Ense
   j["settings"] = {{"g", s.probe_g}, {"dt", r.probe_dt}, {"threads", s.threads}};
   if (r.probe == "nlgs") j["settings"]["velocity_tol_g_per_dt"] = s.probe_velocity_tol;
   if (r.probe == "cd") {  // its start, and its other settings as `unjam probe` records them where set
-    j["settings"]["start"] = cd_start_name(s.probe_cd.start);
+    j["settings"]["start"] = cd_start_name(r.probe_settings->cd.start);
     const nlohmann::json recorded = to_json(*r.probe_settings);
     for (const auto& [key, value] : recorded.items())
       if (key.rfind("cd_", 0) == 0 && key != "cd_start") j["settings"][key] = value;
@@ -231,6 +240,10 @@ nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& s, const Ense
   j["below_f_cont"] = r.below_f_cont;
   j["seconds"] = r.probe_seconds;
   return j;
+}
+
+nlohmann::ordered_json ensemble_parameters_json(const EnsembleSettings& s) {
+  return {{"gap_tol", s.gap_tol}, {"fn_tol_F0", s.fn_tol}, {"lp_tolerance", s.lp_tol}, {"open_tol_F0", s.open_tol}};
 }
 
 }  // namespace unjam

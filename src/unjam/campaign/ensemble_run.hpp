@@ -127,5 +127,8 @@ nlohmann::ordered_json ensemble_methods_json(const EnsembleSettings& settings, c
 // ensemble.json's "probe": the method and, if one ran, its settings, F_crit / fn_max
 // (critical_force_ratio), F_crit's place t in its interval and the time.
 nlohmann::ordered_json ensemble_probe_json(const EnsembleSettings& settings, const EnsembleReport& report);
+// ensemble.json's "parameters": the admissible set's gap_tol and fn_tol_F0 and the LP's
+// lp_tolerance and open_tol_F0.
+nlohmann::ordered_json ensemble_parameters_json(const EnsembleSettings& settings);
 
 }  // namespace unjam

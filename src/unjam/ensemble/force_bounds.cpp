@@ -78,12 +78,8 @@ LpOutcome solve_lp(ForceLP& lp, double open_tol, bool keep_network, Solve solve)
 }  // namespace
 
 void check_force_bounds_options(const ForceBoundsOptions& options) {
+  check_lp_tolerance(options.tolerance, "force bounds: ");
   char why[96];
-  if (!(options.tolerance >= kMinLpTolerance && options.tolerance <= kMaxLpTolerance)) {
-    std::snprintf(why, sizeof why, "the LP tolerance must be in [%g, %g] (got %g)", kMinLpTolerance,
-                  kMaxLpTolerance, options.tolerance);
-    throw Error(std::string("force bounds: ") + why);
-  }
   if (!(options.open_tol_F0 > 0.0 && options.open_tol_F0 <= kMaxOpenTolF0)) {
     std::snprintf(why, sizeof why, "the open tolerance must be in (0, %g] F0 (got %g)", kMaxOpenTolF0,
                   options.open_tol_F0);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <coin/ClpSimplex.hpp>
@@ -208,6 +209,14 @@ bool proves_no_admissible_network(const Eigen::SparseMatrix<double>& Ay, const E
     lowest -= (std::max(0.0, -c) + roundoff) * (rhs[P] / a_P);
   }
   return sign * w_rhs < lowest;
+}
+
+void check_lp_tolerance(double tolerance, const std::string& prefix) {
+  if (tolerance >= kMinLpTolerance && tolerance <= kMaxLpTolerance) return;
+  char why[96];
+  std::snprintf(why, sizeof why, "the LP tolerance must be in [%g, %g] (got %g)", kMinLpTolerance, kMaxLpTolerance,
+                tolerance);
+  throw Error(prefix + why);
 }
 
 bool has_admissible_network(const EquilibriumSystem& system, double tolerance) {

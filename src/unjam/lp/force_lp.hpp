@@ -92,6 +92,9 @@ bool has_admissible_network(const EquilibriumSystem& system, double tolerance, S
 // "The LP's tolerances"): below it CLP's barrier ends LPs "optimal" at wrong points (at 1e-13
 // on p50).
 inline constexpr double kMinLpTolerance = 1e-12, kMaxLpTolerance = 1e-6;
+// Throws unjam::Error(prefix + "the LP tolerance must be in [1e-12, 1e-06] (got T)") for a
+// tolerance outside that range (NaN included).
+void check_lp_tolerance(double tolerance, const std::string& prefix = "");
 
 // The LP over the admissible set of one system, re-solved for one objective after another.
 // Copyable: each copy owns its own CLP models and bases (one per thread).

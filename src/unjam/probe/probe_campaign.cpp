@@ -259,12 +259,7 @@ void validate(const CampaignSettings& s) {
     throw Error("the probe's g, dt and velocity_tol must be positive");
   if (!(s.max_inertia >= 0.0 && std::isfinite(s.max_inertia)))
     throw Error("the largest inertia of a probe that enters the averages must be >= 0 and finite (in F0)");
-  if (!(s.kinematic.lp_tolerance >= kMinLpTolerance && s.kinematic.lp_tolerance <= kMaxLpTolerance)) {
-    char why[96];
-    std::snprintf(why, sizeof why, "--lp-tol must be in [%g, %g] (got %g)", kMinLpTolerance, kMaxLpTolerance,
-                  s.kinematic.lp_tolerance);
-    throw Error(why);
-  }
+  check_lp_tolerance(s.kinematic.lp_tolerance, "--lp-tol: ");
   if (s.kinematic.lp_tolerance != KinematicProbeSettings{}.lp_tolerance && s.method != ProbeMethod::kLp)
     throw Error(std::string("--lp-tol applies to the lp method, not to ") + method_name(s.method));
   if (s.max_inertia > 0.0 && s.method == ProbeMethod::kLp)
