@@ -21,7 +21,8 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                --cd-compliant-start, --cd-softer-starts, --cd-settle-compliance,
                --cd-lost-factor and --cd-restart-floor passed on where given)
                (the paper's own probe step, solved exactly; docs/probe.md) and `--method lp` on
-               the same contacts, into DIR/exact-cd and DIR/exact-lp;
+               the same contacts, into DIR/exact-cd and DIR/exact-lp; the same on the
+               fixed series up to --cd-fixed-max-mu (0.1), into its packings' directories;
   fig4         a 50-disk mu = 0.1 packing, `unjam ensemble --probe cd`, plot_fig4.py;
   probe one    the Fig. 1 packing's contact of largest force probed alone (`unjam probe
                --contact K`) and its displacement field drawn (plot_probe_field.py);
@@ -30,9 +31,11 @@ Stages (each drives the `unjam` binary or one of scripts/plot_*.py through subpr
                network) into DIR/friction_threshold.json;
   tables       OUT/sweep.csv and OUT/fixed.csv (one row per packing, from probe_summary.json),
                OUT/exact-probe.csv (lp and cd on the same contacts, one row per packing),
+               OUT/exact-probe-fixed.csv (the same over the fixed series),
                OUT/friction-threshold.csv (mu_s per packing with friction);
   figures      fig3-friction-sweep.png, fig3-exact-vs-lp.png (with --cd-sample: Fig. 3 by both
-               probes on the same contacts, scripts/plot_exact_sweep.py), fig2-profiles.png
+               probes on the same contacts, scripts/plot_exact_sweep.py),
+               fig3-inset-exact-vs-lp.png (its inset by both), fig2-profiles.png
                (largest N, one curve per mu),
                fig1-field.png and fig1-packing.png (mu = 0.5, else the largest mu);
   report       OUT/report.md: measured values per mu beside the paper's findings
@@ -109,6 +112,11 @@ def parse_args(argv):
                    "interior-point start\")")
     p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
                    "this many disks (default 500: its reach with friction, docs/probe.md)")
+    p.add_argument("--cd-fixed-max-mu", type=float, metavar="MU", help="the exact probe runs "
+                   "on the fixed-packing series up to this mu (default 0.1: about a second per "
+                   "probe at 500 disks, ~30 s at 0.2, mostly out of reach above; docs/probe.md, "
+                   "\"The fixed packing by the paper's probe\"); its table is "
+                   "exact-probe-fixed.csv")
     p.add_argument("--cd-max-pieces", type=int, help="the exact probe's budget of pieces per "
                    "probe (`unjam probe --cd-max-pieces`; stopped probes are counted in "
                    "exact-probe.csv and report.md; default 0: none; docs/probe.md, \"A budget "
@@ -164,6 +172,9 @@ def parse_args(argv):
         p.error(f"--cd-sample must be >= 0, got {args.cd_sample}")
     if args.cd_max_n is not None and args.cd_max_n < 0:
         p.error(f"--cd-max-n must be >= 0, got {args.cd_max_n}")
+    if args.cd_fixed_max_mu is not None and not (math.isfinite(args.cd_fixed_max_mu)
+                                                 and args.cd_fixed_max_mu >= 0):
+        p.error(f"--cd-fixed-max-mu must be a finite number >= 0, got {args.cd_fixed_max_mu}")
     if args.cd_max_pieces is not None and args.cd_max_pieces < 0:
         p.error(f"--cd-max-pieces must be >= 0, got {args.cd_max_pieces}")
     if args.cd_accept_residual is not None and not 1e-6 <= args.cd_accept_residual <= 1e-3:
@@ -204,7 +215,7 @@ def main(argv=None):
     args = parse_args(argv)
     cfg = dict(SCALES[args.scale])
     for k in ("mus", "ns", "seeds", "samples", "probe_sample", "cd_sample", "cd_max_n",
-              "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start",
+              "cd_fixed_max_mu", "cd_start", "cd_max_pieces", "cd_accept_residual", "cd_compliant_start",
               "cd_softer_starts", "cd_settle_compliance", "cd_lost_factor", "cd_restart_floor"):
         if getattr(args, k) is not None:
             cfg[k] = getattr(args, k)

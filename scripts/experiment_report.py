@@ -145,18 +145,20 @@ def sampling_error(group, method):
     return f"{math.sqrt(sum(float(e) ** 2 for e in errs)) / len(errs):.4f}"
 
 
-def exact_probe_section(path, start):
+def exact_probe_section(path, start, title="The exact probe beside lp", what=""):
     """Report lines comparing the exact probe (cd, from `start`) with lp on the same contacts,
-    from OUT/exact-probe.csv (none when the table does not exist)."""
+    from OUT/exact-probe.csv or OUT/exact-probe-fixed.csv (none when the table does not exist);
+    `what` names the packings before the common explanation."""
     if not os.path.isfile(path):
         return []
     groups = rows_by_mu_and_n(read_table(path))
     mean = lambda g, c: sweep_table.mean_std([sweep_table.number(r[c]) for r in g])  # noqa: E731
-    L = ["", "## The exact probe beside lp", "",
-         "The paper's probe step solved exactly (`--method cd --cd-start " + start + "`: "
+    L = ["", "## " + title, "",
+         what + "The paper's probe step solved exactly (`--method cd --cd-start " + start + "`: "
          + START_WORDS[start] +
          "docs/probe.md) and the lp stand-in (F_crit = the LP maximum) on the same seeded "
-         "contacts of each packing (`exact-probe.csv`); mean ± standard deviation over the seeds. "
+         "contacts of each packing (`" + os.path.basename(path) + "`); mean ± standard deviation "
+         "over the seeds. "
          "'sampling error': the standard error of the seeds' mean from the sampling of the "
          "contacts alone, sqrt(sum SE_i^2) / seeds over each packing's own SE_i "
          "(`F_crit_over_F_cont_err` of its summary; docs/probe.md, \"Campaigns\"), lp / cd; the "
@@ -242,6 +244,11 @@ def write_report(path, args, cfg, R, figures, command):
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
     L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
+    L += exact_probe_section(
+        os.path.join(out, "exact-probe-fixed.csv"), cfg["cd_start"],
+        "The exact probe beside lp on the fixed packing",
+        "Fig. 3's inset by both probes: the mu = 0 packing re-relaxed at each mu up to "
+        f"{fmt_mu(cfg['cd_fixed_max_mu'])} (`--cd-fixed-max-mu`). ")
     if "threshold" not in (args.skip or []):
         L += threshold_section(os.path.join(out, "friction-threshold.csv"))
     L += ["", f"## Against the paper (findings: docs/results/README.md; measured at N = {n_max})", "",
@@ -266,7 +273,8 @@ def write_report(path, args, cfg, R, figures, command):
              else "every force-carrying contact"),
           "- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
-             f"--cd-start {cfg['cd_start']}"
+             f"--cd-start {cfg['cd_start']}, and on the fixed series up to mu = "
+             f"{fmt_mu(cfg['cd_fixed_max_mu'])}"
              + "".join(f", {flag} {value}" for flag, value in pairs(cd_options(cfg)))
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "

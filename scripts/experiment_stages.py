@@ -51,14 +51,15 @@ CD_DEFAULTS = {"cd_max_pieces": 0, "cd_accept_residual": 0, "cd_compliant_start"
                "cd_restart_floor": 0}
 SCALES = {
     "tiny": {"mus": [0, 0.1, 1], "ns": [100], "seeds": [1], "samples": 2000, "probe_sample": 0,
-             "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior", **CD_DEFAULTS},
+             "cd_sample": 0, "cd_max_n": 500, "cd_fixed_max_mu": 0.1,
+             "cd_start": "interior", **CD_DEFAULTS},
     "demo": {"mus": [0, 0.02, 0.1, 0.5, 1], "ns": [400], "seeds": [1, 2], "samples": 2000,
-             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_start": "interior",
-             **CD_DEFAULTS},
+             "probe_sample": 0, "cd_sample": 0, "cd_max_n": 500, "cd_fixed_max_mu": 0.1,
+             "cd_start": "interior", **CD_DEFAULTS},
     "paper": {"mus": [0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1],
               "ns": [500, 1000, 2000, 4000, 8000], "seeds": [1, 2, 3], "samples": 20000,
-              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_start": "interior",
-              **CD_DEFAULTS},
+              "probe_sample": 1000, "cd_sample": 300, "cd_max_n": 500, "cd_fixed_max_mu": 0.1,
+              "cd_start": "interior", **CD_DEFAULTS},
 }
 # The exact probe's comparison table (OUT/exact-probe.csv), one row per packing. not_exact:
 # cd probes whose step was not solved exactly (residual above 1e-6 g); without_solution: those
@@ -426,7 +427,13 @@ def build(args, cfg, R):
     stages += packing_stages(R, fixed, args.probe_g, cfg["probe_sample"])
     # The exact probe beside lp, where it is affordable.
     exact = [p for p in sweep if cfg["cd_sample"] > 0 and p["n"] <= cfg["cd_max_n"]]
-    for p in exact:
+    # and on the fixed series up to cd_fixed_max_mu (the frozen mu = 0 structure is solved in
+    # about a second per probe up to mu = 0.1 at 500 disks, ~30 s at 0.2; docs/probe.md, "The
+    # fixed packing by the paper's probe"); its mu = 0 point is the source's own comparison.
+    exact_fixed = [p for p in fixed if cfg["cd_sample"] > 0 and p["n"] <= cfg["cd_max_n"]
+                   and p["mu"] <= cfg["cd_fixed_max_mu"]]
+    exact_fixed_rows = ([source] if source in exact else []) + exact_fixed
+    for p in exact + exact_fixed:
         stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
                                         p["pack"], cd_options(cfg)))
@@ -457,6 +464,12 @@ def build(args, cfg, R):
             R, "table exact", os.path.join(out, "exact-probe.csv"),
             [table_entry(p) for p in exact],
             ["exact " + p["probe"][len("probe "):] for p in exact], EXACT_COLUMNS, exact_row))
+    exact_fixed_csv = os.path.join(out, "exact-probe-fixed.csv")
+    if exact_fixed:
+        stages.append(table_stage(
+            R, "table exact fixed", exact_fixed_csv, [table_entry(p) for p in exact_fixed_rows],
+            ["exact " + p["probe"][len("probe "):] for p in exact_fixed_rows], EXACT_COLUMNS,
+            exact_row))
     if frictional:
         stages.append(table_stage(
             R, "table threshold", os.path.join(out, "friction-threshold.csv"),
@@ -481,6 +494,14 @@ def build(args, cfg, R):
                                  [[PY, os.path.join(SCRIPTS, "plot_exact_sweep.py"),
                                    os.path.join(out, "exact-probe.csv"), "--out", fig3x]],
                                  ["table exact"]))
+    # The inset by both probes, from the fixed series' exact-probe table.
+    fig3ix = os.path.join(out, "fig3-inset-exact-vs-lp.png")
+    if exact_fixed:
+        stages.append(plot_stage(R, "plot fig3 inset exact", [fig3ix],
+                                 [[PY, os.path.join(SCRIPTS, "plot_exact_sweep.py"), exact_fixed_csv,
+                                   "--out", fig3ix, "--title",
+                                   "the fixed packing (Fig. 3 inset): cd filled, lp open"]],
+                                 ["table exact fixed"]))
     nmax = max(cfg["ns"])
     # Fig. 2 per size: d(r) of every mu (first seed); fig2-profiles.png is the largest N.
     fig2_of = {}
@@ -520,6 +541,9 @@ def build(args, cfg, R):
                *([(f"Fig. 3 by the paper's probe (cd, {cfg['cd_sample']} contacts per packing of "
                    f"N <= {cfg['cd_max_n']}) beside the stand-in (lp) on the same contacts", fig3x)]
                  if exact else []),
+               *([(f"Fig. 3's inset by the paper's probe (cd, {cfg['cd_sample']} contacts per "
+                   f"packing, mu <= {fmt_mu(cfg['cd_fixed_max_mu'])}) beside the stand-in (lp)",
+                   fig3ix)] if exact_fixed else []),
                *([(f"Fig. 4: force-network ensemble, N = {FIG4['n']}, mu = {FIG4['mu']}", fig4)]
                  if "fig4" not in skip else [])]
     return stages, figures

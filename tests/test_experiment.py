@@ -281,8 +281,11 @@ class ExperimentTiny(unittest.TestCase):
         # two summaries' numbers and the report shows them side by side.
         res, rows = self.run_exact_stages()
         exact = {k for k, v in res.items() if k.startswith("exact ")}
-        self.assertEqual(exact, {f"exact N100-mu{mu}-s1" for mu in ("0", "0.1", "1")})
+        # the sweep's packings, and the fixed series up to --cd-fixed-max-mu (0.1: not mu = 1)
+        self.assertEqual(exact, {f"exact N100-mu{mu}-s1" for mu in ("0", "0.1", "1")}
+                         | {"exact fixed N100-mu0.1"})
         self.assertEqual(res["table exact"], "ran")
+        self.assertEqual(res["table exact fixed"], "ran")
         for mu, r in rows.items():
             d = os.path.join(self.out, "packings", f"N100-mu{mu}-s1")
             for m in ("cd", "lp"):
@@ -311,6 +314,28 @@ class ExperimentTiny(unittest.TestCase):
             self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
         self.assertIn("(lp) on the same contacts: [fig3-exact-vs-lp.png](fig3-exact-vs-lp.png)",
                       report)
+        # The fixed series (Fig. 3's inset) by both probes: its mu = 0 row is the source
+        # packing's own comparison, its mu = 0.1 row the frozen structure's, all exact.
+        with open(os.path.join(self.out, "exact-probe-fixed.csv")) as f:
+            fixed = {r["mu"]: r for r in csv.DictReader(f)}
+        self.assertEqual(set(fixed), {"0", "0.1"})
+        self.assertEqual(fixed["0"], rows["0"])
+        d = os.path.join(self.out, "fixed", "N100-mu0.1")
+        for m in ("cd", "lp"):
+            with open(os.path.join(d, f"exact-{m}", "probe_summary.json")) as f:
+                s = json.load(f)
+            self.assertEqual((s["method"], s["probes"], s["mu"]), (m, 3, 0.1))
+            self.assertEqual(float(fixed["0.1"][f"F_crit_over_F_cont_{m}"]), s["F_crit_over_F_cont"])
+        self.assertEqual(int(fixed["0.1"]["not_exact"]), 0)
+        # the paper's probe does not exceed the LP maximum beyond its inertial term
+        self.assertLessEqual(float(fixed["0.1"]["F_crit_over_F_cont_cd"]),
+                             1.01 * float(fixed["0.1"]["F_crit_over_F_cont_lp"]))
+        self.assertIn("## The exact probe beside lp on the fixed packing", report)
+        self.assertIn("`exact-probe-fixed.csv`", report)
+        self.assertEqual(res["plot fig3 inset exact"], "ran")
+        with open(os.path.join(self.out, "fig3-inset-exact-vs-lp.png"), "rb") as f:
+            self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+        self.assertIn("[fig3-inset-exact-vs-lp.png](fig3-inset-exact-vs-lp.png)", report)
 
     def test_9b_exact_probe_within_a_budget_of_pieces(self):
         # --cd-max-pieces 2: the exact stages run again with the budget (their command
@@ -448,7 +473,9 @@ class ExperimentArguments(unittest.TestCase):
                                   (["--cd-settle-compliance", "-1e-5"], "--cd-settle-compliance"),
                                   (["--cd-settle-compliance", "nan"], "--cd-settle-compliance"),
                                   (["--cd-lost-factor", "-1"], "--cd-lost-factor"),
-                                  (["--cd-lost-factor", "inf"], "--cd-lost-factor")]:
+                                  (["--cd-lost-factor", "inf"], "--cd-lost-factor"),
+                                  (["--cd-fixed-max-mu", "-0.1"], "--cd-fixed-max-mu"),
+                                  (["--cd-fixed-max-mu", "nan"], "--cd-fixed-max-mu")]:
                 p = subprocess.run([sys.executable, SCRIPT, "--scale", "tiny", "--out", out,
                                     "--unjam", UNJAM, *extra],
                                    capture_output=True, text=True, cwd=REPO, timeout=60)
