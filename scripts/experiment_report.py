@@ -273,9 +273,10 @@ def write_report(path, args, cfg, R, figures, command):
              else "every force-carrying contact"),
           "- exact probe (cd) beside lp: "
           + (f"{cfg['cd_sample']} contacts per packing of N <= {cfg['cd_max_n']}, "
-             f"--cd-start {cfg['cd_start']}, and on the fixed series up to mu = "
-             f"{fmt_mu(cfg['cd_fixed_max_mu'])}"
+             f"--cd-start {cfg['cd_start']}"
              + "".join(f", {flag} {value}" for flag, value in pairs(cd_options(cfg)))
+             + (f"; also on the fixed series up to mu = {fmt_mu(cfg['cd_fixed_max_mu'])}"
+                if os.path.isfile(os.path.join(out, "exact-probe-fixed.csv")) else "")
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",

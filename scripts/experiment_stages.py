@@ -201,6 +201,11 @@ def threshold_row(d, mu, n, seed):
             "lp_seconds": repr(float(t["timings_s"]["lp"]))}
 
 
+def exact_name(p):
+    """The exact-probe stage of packing record p: "exact N100-mu0.1-s1", "exact fixed N100-mu0.1"."""
+    return "exact " + p["probe"][len("probe "):]
+
+
 def exact_probe_dirs(d):
     """{method: output directory} of the exact-probe comparison of packing directory d."""
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
@@ -434,7 +439,7 @@ def build(args, cfg, R):
                    and p["mu"] <= cfg["cd_fixed_max_mu"]]
     exact_fixed_rows = ([source] if source in exact else []) + exact_fixed
     for p in exact + exact_fixed:
-        stages.append(exact_probe_stage(R, "exact " + p["probe"][len("probe "):], p["dir"],
+        stages.append(exact_probe_stage(R, exact_name(p), p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
                                         p["pack"], cd_options(cfg)))
 
@@ -463,12 +468,12 @@ def build(args, cfg, R):
         stages.append(table_stage(
             R, "table exact", os.path.join(out, "exact-probe.csv"),
             [table_entry(p) for p in exact],
-            ["exact " + p["probe"][len("probe "):] for p in exact], EXACT_COLUMNS, exact_row))
+            [exact_name(p) for p in exact], EXACT_COLUMNS, exact_row))
     exact_fixed_csv = os.path.join(out, "exact-probe-fixed.csv")
     if exact_fixed:
         stages.append(table_stage(
             R, "table exact fixed", exact_fixed_csv, [table_entry(p) for p in exact_fixed_rows],
-            ["exact " + p["probe"][len("probe "):] for p in exact_fixed_rows], EXACT_COLUMNS,
+            [exact_name(p) for p in exact_fixed_rows], EXACT_COLUMNS,
             exact_row))
     if frictional:
         stages.append(table_stage(

@@ -336,6 +336,7 @@ class ExperimentTiny(unittest.TestCase):
         with open(os.path.join(self.out, "fig3-inset-exact-vs-lp.png"), "rb") as f:
             self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
         self.assertIn("[fig3-inset-exact-vs-lp.png](fig3-inset-exact-vs-lp.png)", report)
+        self.assertIn("--cd-start interior; also on the fixed series up to mu = 0.1", report)
 
     def test_9b_exact_probe_within_a_budget_of_pieces(self):
         # --cd-max-pieces 2: the exact stages run again with the budget (their command
