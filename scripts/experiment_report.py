@@ -243,9 +243,10 @@ def write_report(path, args, cfg, R, figures, command):
         for (mu, n), a in fixed_agg.items():
             L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
                      + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+    exact_fixed_csv = os.path.join(out, "exact-probe-fixed.csv")
     L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
     L += exact_probe_section(
-        os.path.join(out, "exact-probe-fixed.csv"), cfg["cd_start"],
+        exact_fixed_csv, cfg["cd_start"],
         "The exact probe beside lp on the fixed packing",
         "Fig. 3's inset by both probes: the mu = 0 packing re-relaxed at each mu up to "
         f"{fmt_mu(cfg['cd_fixed_max_mu'])} (`--cd-fixed-max-mu`). ")
@@ -276,7 +277,7 @@ def write_report(path, args, cfg, R, figures, command):
              f"--cd-start {cfg['cd_start']}"
              + "".join(f", {flag} {value}" for flag, value in pairs(cd_options(cfg)))
              + (f"; also on the fixed series up to mu = {fmt_mu(cfg['cd_fixed_max_mu'])}"
-                if os.path.isfile(os.path.join(out, "exact-probe-fixed.csv")) else "")
+                if os.path.isfile(exact_fixed_csv) else "")
              if cfg["cd_sample"] > 0 else "not run (--cd-sample 0)"),
           f"- Fig. 4: N = {FIG4['n']}, mu = {FIG4['mu']}, seed = {FIG4['seed']}, "
           f"samples = {cfg['samples']}",
