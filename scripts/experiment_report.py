@@ -218,6 +218,17 @@ def pairs(args):
     return list(zip(args[::2], args[1::2]))
 
 
+def measured_table(agg):
+    """The markdown table of QUANTITIES per (mu, N) of sweep_table.aggregate's AGG, mean ±
+    standard deviation over the seeds."""
+    L = ["| mu | N | seeds | " + " | ".join(lbl for _, lbl in QUANTITIES) + " |",
+         "|---|---|---|" + "---|" * len(QUANTITIES)]
+    for (mu, n), a in agg.items():
+        L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
+                 + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+    return L
+
+
 def write_report(path, args, cfg, R, figures, command):
     """OUT/report.md from OUT/sweep.csv and OUT/fixed.csv; command: the experiment's command
     line (a list)."""
@@ -230,19 +241,11 @@ def write_report(path, args, cfg, R, figures, command):
     L = ["# unjam experiment report", "",
          f"Scale **{args.scale}**; written {time.strftime('%Y-%m-%d %H:%M:%S')}.", "",
          "## Measured values per mu", "",
-         "Mean ± standard deviation over the seeds (0 for one seed); from `sweep.csv`.", "",
-         "| mu | N | seeds | " + " | ".join(lbl for _, lbl in QUANTITIES) + " |",
-         "|---|---|---|" + "---|" * len(QUANTITIES)]
-    for (mu, n), a in agg.items():
-        L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
-                 + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+         "Mean ± standard deviation over the seeds (0 for one seed); from `sweep.csv`.", ""]
+    L += measured_table(agg)
     if fixed_agg:
-        L += ["", "Fixed packing (the mu = 0 packing re-relaxed at each mu; `fixed.csv`):", "",
-              "| mu | N | seeds | " + " | ".join(lbl for _, lbl in QUANTITIES) + " |",
-              "|---|---|---|" + "---|" * len(QUANTITIES)]
-        for (mu, n), a in fixed_agg.items():
-            L.append(f"| {fmt_mu(mu)} | {n} | {a['seeds']} | "
-                     + " | ".join(pm(a[c]) for c, _ in QUANTITIES) + " |")
+        L += ["", "Fixed packing (the mu = 0 packing re-relaxed at each mu; `fixed.csv`):", ""]
+        L += measured_table(fixed_agg)
     exact_fixed_csv = os.path.join(out, "exact-probe-fixed.csv")
     L += exact_probe_section(os.path.join(out, "exact-probe.csv"), cfg["cd_start"])
     L += exact_probe_section(
