@@ -201,11 +201,6 @@ def threshold_row(d, mu, n, seed):
             "lp_seconds": repr(float(t["timings_s"]["lp"]))}
 
 
-def exact_name(p):
-    """The exact-probe stage of packing record p: "exact N100-mu0.1-s1", "exact fixed N100-mu0.1"."""
-    return "exact " + p["probe"][len("probe "):]
-
-
 def exact_probe_dirs(d):
     """{method: output directory} of the exact-probe comparison of packing directory d."""
     return {"cd": os.path.join(d, "exact-cd"), "lp": os.path.join(d, "exact-lp")}
@@ -336,7 +331,7 @@ def table_stage(R, name, path, entries, deps, columns=sweep_table.COLUMNS, row=s
 
 def sweep_packings(cfg, out):
     """One record per (N, mu, seed) of the scale, in stage order: its directory, the names of
-    its pack and probe stages, the `unjam pack` arguments and the stages its pack depends on."""
+    its pack, probe and exact-probe stages, the `unjam pack` arguments and the stages its pack depends on."""
     packings = []
     for n in cfg["ns"]:
         for mu in cfg["mus"]:
@@ -344,7 +339,8 @@ def sweep_packings(cfg, out):
                 tag = f"N{n}-mu{fmt_mu(mu)}-s{seed}"
                 packings.append({
                     "mu": mu, "n": n, "seed": seed, "dir": os.path.join(out, "packings", tag),
-                    "pack": f"pack {tag}", "probe": f"probe {tag}", "deps": [],
+                    "pack": f"pack {tag}", "probe": f"probe {tag}", "exact": f"exact {tag}",
+                    "deps": [],
                     "args": ["--n", n, "--mu", fmt_mu(mu), "--seed", seed]
                     + (FRICTIONLESS_PACK if mu == 0 else [])})
     return packings
@@ -362,7 +358,8 @@ def fixed_packings(cfg, out, source):
         packings.append({
             "mu": mu, "n": n0, "seed": source["seed"],
             "dir": os.path.join(out, "fixed", f"N{n0}-mu{fmt_mu(mu)}"),
-            "pack": f"pack {tag}", "probe": f"probe {tag}", "deps": [source["pack"]],
+            "pack": f"pack {tag}", "probe": f"probe {tag}", "exact": f"exact {tag}",
+            "deps": [source["pack"]],
             "args": ["--from", source["dir"], "--mu", fmt_mu(mu)]})
     return packings
 
@@ -439,7 +436,7 @@ def build(args, cfg, R):
                    and p["mu"] <= cfg["cd_fixed_max_mu"]]
     exact_fixed_rows = ([source] if source in exact else []) + exact_fixed
     for p in exact + exact_fixed:
-        stages.append(exact_probe_stage(R, exact_name(p), p["dir"],
+        stages.append(exact_probe_stage(R, p["exact"], p["dir"],
                                         args.probe_g, cfg["cd_sample"], cfg["cd_start"],
                                         p["pack"], cd_options(cfg)))
 
@@ -468,12 +465,12 @@ def build(args, cfg, R):
         stages.append(table_stage(
             R, "table exact", os.path.join(out, "exact-probe.csv"),
             [table_entry(p) for p in exact],
-            [exact_name(p) for p in exact], EXACT_COLUMNS, exact_row))
+            [p["exact"] for p in exact], EXACT_COLUMNS, exact_row))
     exact_fixed_csv = os.path.join(out, "exact-probe-fixed.csv")
     if exact_fixed:
         stages.append(table_stage(
             R, "table exact fixed", exact_fixed_csv, [table_entry(p) for p in exact_fixed_rows],
-            [exact_name(p) for p in exact_fixed_rows], EXACT_COLUMNS,
+            [p["exact"] for p in exact_fixed_rows], EXACT_COLUMNS,
             exact_row))
     if frictional:
         stages.append(table_stage(
