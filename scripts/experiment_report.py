@@ -123,6 +123,8 @@ START_WORDS = {
     "interior": "the path from an interior-point iterate of the step, lowered to the rigid step, ",
     "compliant": "the rigid limit of stiff contacts followed from the static network, ",
     "static": "the path from the static network, ",
+    "inertial": "the step at a tenth of dt followed in dt to the quasi-static one (the limit of vanishing "
+                "inertia), ",
 }
 
 

@@ -7,10 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -354,6 +356,96 @@ TEST(CdPath, TheBranchFromTheStaticNetworkCanCloseOnItself) {
   const CdStepSolution c82 = probe_cd_path(p, 82, ProbeSettings{}, compliant, &soft);
   EXPECT_EQ(soft.failure, "");
   EXPECT_LE(c82.residual.max(), kExactStepTolerance);
+}
+
+TEST(CdPath, InertialStartFollowsTheStepInDtToTheQuasiStaticOne) {
+  // p200-mu1 at the quasi-static step (docs/probe.md, "The quasi-static step as the limit of
+  // vanishing inertia"): the inertial start solves the step at a tenth of dt (a hundred times
+  // the inertia m g / dt^2), then follows it in dt to the probe's own in inertial_stages stages,
+  // each the path from the last stage's solution. Its solution is the quasi-static step's:
+  // exact in the shared residual check of the step at the probe's dt.
+  const Packing& p = fixture("p200-mu1");
+  const ProbeSettings qs = quasi_static_step();
+  CdPathSettings inertial;
+  inertial.start = CdPathStart::inertial;
+  for (const int k : {0, 55}) {
+    SCOPED_TRACE(k);
+    CdPathStats st;
+    const CdStepSolution sol = probe_cd_path(p, k, qs, inertial, &st);
+    ASSERT_GT(sol.f.size(), 0);
+    EXPECT_LE(sol.residual.max(), kExactStepTolerance);
+    EXPECT_TRUE(sol.result.converged);
+    const CdStepResidual r = cd_step_residual(build_cd_step(p, k, qs), sol.f);
+    EXPECT_LE(r.max(), kExactStepTolerance);
+    EXPECT_DOUBLE_EQ(st.inertial_dt_start, qs.dt / inertial.inertial_factor);
+    EXPECT_EQ(st.inertial_dt_reached, qs.dt);
+    EXPECT_FALSE(st.inertial_fallback);
+    EXPECT_EQ(st.inertial_stages, inertial.inertial_stages);  // every stage exact at once here
+    EXPECT_EQ(st.inertial_jumps, 0);
+    // the paths of the first stage and of the stages in between are listed with their dt,
+    // rising; the last is the probe's own (dt 0)
+    ASSERT_GE(st.paths.size(), 2u);
+    EXPECT_DOUBLE_EQ(st.paths.front().dt, qs.dt / inertial.inertial_factor);
+    EXPECT_EQ(st.paths.back().dt, 0.0);
+    for (std::size_t i = 1; i + 1 < st.paths.size(); ++i) {
+      EXPECT_GE(st.paths[i].dt, st.paths[i - 1].dt);
+      EXPECT_LT(st.paths[i].dt, qs.dt);
+    }
+    EXPECT_EQ(sol.result.sweeps, st.pieces_all);
+  }
+  // Contact 0: another of the step's exact solutions than the interior-point start's (the step
+  // has several at mu = 1): 2.844066 F0, the one the fixed point on the friction thresholds
+  // reaches (docs/probe.md, "What limits it", item 6), against 2.795944 F0.
+  const CdStepSolution s0 = probe_cd_path(p, 0, qs, inertial);
+  EXPECT_NEAR(s0.result.f_crit / p.force_unit(), 2.844066, 1e-6);
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  const CdStepSolution i0 = probe_cd_path(p, 0, qs, interior);
+  EXPECT_LE(i0.residual.max(), kExactStepTolerance);
+  EXPECT_GT(std::abs(i0.result.f_crit - s0.result.f_crit) / p.force_unit(), 1e-2);
+}
+
+TEST(CdPath, InertialStartFallsBackWhereItsContinuationFolds) {
+  // p200-mu1, contact 3: the branch followed from the step at a tenth of dt folds in dt near
+  // 2.2e-3 and the branches the interior-point start jumps to fold again at once; after
+  // inertial_jumps jumps the interior-point start at the probe's dt solves the step. Within a
+  // budget of pieces the stages share it, and the probe stops when it is spent.
+  const Packing& p = fixture("p200-mu1");
+  const ProbeSettings qs = quasi_static_step();
+  CdPathSettings inertial;
+  inertial.start = CdPathStart::inertial;
+  CdPathStats st;
+  const CdStepSolution sol = probe_cd_path(p, 3, qs, inertial, &st);
+  EXPECT_LE(sol.residual.max(), kExactStepTolerance);
+  EXPECT_TRUE(st.inertial_fallback);
+  EXPECT_EQ(st.inertial_jumps, inertial.inertial_jumps);
+  EXPECT_GT(st.inertial_dt_reached, st.inertial_dt_start);
+  EXPECT_LT(st.inertial_dt_reached, qs.dt);
+  EXPECT_EQ(st.paths.back().dt, 0.0);
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  const CdStepSolution i3 = probe_cd_path(p, 3, qs, interior);
+  EXPECT_EQ(sol.result.f_crit, i3.result.f_crit);  // the fallback is the interior-point start
+  // the budget: shared by every stage; the probe stops once it is spent
+  CdPathSettings budget = inertial;
+  budget.max_probe_pieces = 300;
+  CdPathStats sb;
+  const CdStepSolution b = probe_cd_path(p, 3, qs, budget, &sb);
+  EXPECT_TRUE(sb.budget_spent);
+  EXPECT_EQ(b.result.sweeps, 301);
+  EXPECT_EQ(sb.failure, "budget");
+  EXPECT_FALSE(b.result.converged);
+  // its name, and settings it refuses
+  EXPECT_EQ(cd_start_from_name("inertial"), CdPathStart::inertial);
+  EXPECT_STREQ(cd_start_name(CdPathStart::inertial), "inertial");
+  for (const auto& set : std::vector<std::function<void(CdPathSettings&)>>{
+           [](CdPathSettings& c) { c.inertial_factor = 1.0; }, [](CdPathSettings& c) { c.inertial_stages = 0; },
+           [](CdPathSettings& c) { c.inertial_halvings = -1; }, [](CdPathSettings& c) { c.inertial_retries = -1; },
+           [](CdPathSettings& c) { c.inertial_jumps = -1; }}) {
+    CdPathSettings bad = inertial;
+    set(bad);
+    EXPECT_THROW(probe_cd_path(p, 3, qs, bad), Error);
+  }
 }
 
 TEST(CdPath, EachPathReportsItsFactorisationsAndItsCpuTime) {

@@ -474,7 +474,7 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
     interior = unjam.probe(p, contact=14, method="cd", cd_start="interior")
     assert interior.converged
     assert [[float(x["ux"]), float(x["uy"])] for x in read_csv(tmp_path / "ip" / "probe-14.csv")] == interior.u.tolist()
-    with pytest.raises(unjam.Error, match="must be static, lp, compliant or interior"):
+    with pytest.raises(unjam.Error, match="must be static, lp, compliant, interior or inertial"):
         unjam.probe(p, contact=14, method="cd", cd_start="soft")
     with pytest.raises(unjam.Error, match="the cd start 'compliant' applies to the cd method only"):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")
@@ -675,7 +675,7 @@ def test_the_cd_settings_are_one_typed_object():
                                   ("lost_factor", float("inf"), "--cd-lost-factor must be >= 0"),
                                   ("restart_floor", -1e-5, "--cd-restart-floor must be >= 0"),
                                   ("restart_floor", float("nan"), "--cd-restart-floor must be >= 0"),
-                                  ("start", "soft", "--cd-start must be static, lp, compliant or interior")]:
+                                  ("start", "soft", "--cd-start must be static, lp, compliant, interior or inertial")]:
         t = copy.copy(s)
         with pytest.raises(unjam.Error, match=message):
             setattr(t, field, value)

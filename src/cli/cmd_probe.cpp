@@ -204,12 +204,19 @@ void print_cd_paths(const CdPathStats& stats) {
                 "%s\n",
                 stats.interior_again_iterations, stats.interior_again_short_steps, stats.interior_again_residual,
                 stats.interior_again_kept ? "its iterate is the start" : "the first iterate is the start");
+  if (stats.inertial_dt_start > 0.0)
+    std::printf("  inertial start: the step at dt %.3g, continued in dt to %.3g in %d stages (%d interior-point "
+                "starts past folds in dt)%s\n",
+                stats.inertial_dt_start, stats.inertial_dt_reached, stats.inertial_stages, stats.inertial_jumps,
+                stats.inertial_fallback ? "; then the interior-point start at the probe's dt" : "");
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
     const char* from = a.other_iterate ? (a.iterate_states ? "from the other iterate's states "
                                                            : "from the other iterate's forces' states ")
                                        : (a.iterate_states ? "from the interior point's states " : "");
-    std::printf("  path %zu %sat compliance %.3g: ", i + 1, from, a.compliance);
+    std::printf("  path %zu %sat compliance %.3g", i + 1, from, a.compliance);
+    if (a.dt > 0.0) std::printf(" (the step at dt %.4g)", a.dt);
+    std::printf(": ");
     if (a.lambda_max < 1.0)
       std::printf("stopped at %.3g of the opening (%s)", a.lambda_max, a.failure.c_str());
     else if (a.compliance_end > 0.0)

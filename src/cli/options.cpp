@@ -82,7 +82,10 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "where the step has several, on small packings: it fails at 500 disks) or compliant (the static network "
                   "at a soft compliance, lowered to the rigid step: the rigid limit of stiff contacts; fast, but at 500 "
                   "disks another solution than static's) or interior (the iterate of an interior-point method on the step: "
-                  "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\")")
+                  "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\") or "
+                  "inertial (the interior start on the step at a tenth of dt, more inertia, continued in dt to the "
+                  "quasi-static step: the limit of vanishing inertia; solves probes that the others do not at high "
+                  "friction; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\")")
       ->capture_default_str();
   cmd->add_option(
       "--cd-softer-starts", cd.softer_starts,

@@ -901,11 +901,12 @@ void record_interior(const InteriorIterates& it, CdPathStats& stats) {
 // start, from `iterate` (of interior_iterates: other_iterate where it is not the start).
 CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings,
                                 const CdPathSettings& ps, CdPathStats* stats_out,
-                                const InteriorPointResult* iterate = nullptr, bool other_iterate = false) {
+                                const InteriorPointResult* iterate = nullptr, bool other_iterate = false,
+                                const CdStepGuess* from = nullptr) {
   if (ps.start == CdPathStart::lp_optimum && settings.window > 0.0)
     throw Error("cd path: the lp optimum's start is the whole packing's; it does not go with a window");
   CdStepGuess start_guess;  // the lp optimum or the interior-point iterate
-  const CdStepGuess* guess = nullptr;
+  const CdStepGuess* guess = from;  // a guess of the caller's (the inertial start's stages)
   if (ps.start == CdPathStart::lp_optimum) {
     start_guess = lp_optimum_guess(packing, pb, settings);
     guess = &start_guess;
@@ -1057,8 +1058,10 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
 // the paths from its other iterate where it ran twice ("Keeping the iterates centred"), then by
 // the compliant continuation, each within what is left of the budget; the lowest residual is
 // kept and every path is listed.
-CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
-                             const CdPathSettings& ps, CdPathStats* stats_out) {
+namespace {
+
+CdStepSolution probe_cd_direct(const Packing& packing, int contact, const ProbeSettings& settings,
+                               const CdPathSettings& ps, CdPathStats* stats_out) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
   std::optional<InteriorIterates> iterates;
   const double interior_cpu_start = thread_cpu_seconds();
@@ -1102,6 +1105,158 @@ CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSet
                   sol.residual.max() <= ps.accept_residual;
   if (stats_out) *stats_out = std::move(kept);
   return sol;
+}
+
+// The solution `sol` of step pb as the start of a path on a step of the same contacts and
+// grains (another dt): its forces and the grains' displacements (q: peculiar displacement,
+// rotation times radius, the cell's lambda dt), as lp_optimum_guess reads the lp optimum.
+CdStepGuess solution_guess(const Packing& packing, const CdStepProblem& pb, const CdStepSolution& sol) {
+  CdStepGuess guess;
+  guess.f = sol.f;
+  const ProbeResult& r = sol.result;
+  guess.q = Eigen::VectorXd::Zero(pb.system.A.rows());
+  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
+    const int id = pb.system.grains[i];
+    guess.q[3 * i] = r.u[id].x();
+    guess.q[3 * i + 1] = r.u[id].y();
+    guess.q[3 * i + 2] = r.u_rot[id] * packing.particles.radius[id];
+  }
+  guess.q[pb.system.pressure_row()] = r.lambda_dt;
+  return guess;
+}
+
+// CdPathStart::inertial (CdPathSettings::inertial_factor and the settings after it; docs/probe.md,
+// "The quasi-static step as the limit of vanishing inertia"): the step at more inertia by the
+// interior-point start, continued in dt to the probe's own, then the interior-point start at
+// the probe's dt where the continuation does not get there.
+CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const ProbeSettings& settings,
+                                 const CdPathSettings& ps, CdPathStats* stats_out) {
+  if (!(ps.inertial_factor > 1.0) || !std::isfinite(ps.inertial_factor))
+    throw Error("cd path: inertial_factor must be > 1 (got " + std::to_string(ps.inertial_factor) + ")");
+  if (ps.inertial_stages < 1)
+    throw Error("cd path: inertial_stages must be >= 1 (got " + std::to_string(ps.inertial_stages) + ")");
+  if (ps.inertial_halvings < 0)
+    throw Error("cd path: inertial_halvings must be >= 0 (got " + std::to_string(ps.inertial_halvings) + ")");
+  if (ps.inertial_retries < 0)
+    throw Error("cd path: inertial_retries must be >= 0 (got " + std::to_string(ps.inertial_retries) + ")");
+  if (ps.inertial_jumps < 0)
+    throw Error("cd path: inertial_jumps must be >= 0 (got " + std::to_string(ps.inertial_jumps) + ")");
+  CdPathStats all;
+  std::vector<CdPathAttempt> paths;
+  long long used = 0;
+  const auto exact = [](const CdStepSolution& x) { return x.f.size() > 0 && x.residual.max() <= kExactStepTolerance; };
+  const auto residual = [](const CdStepSolution& x) { return x.f.size() > 0 ? x.residual.max() : kNoSolution; };
+  // Each stage within what is left of the budget; its paths listed with their dt (0: the
+  // probe's own). The returned stage's statistics are the probe's, its paths all of them.
+  const auto account = [&](CdPathStats& st, double dt) {
+    for (CdPathAttempt& a : st.paths) a.dt = dt == settings.dt ? 0.0 : dt;
+    paths.insert(paths.end(), st.paths.begin(), st.paths.end());
+    used += st.pieces_all;
+    all.budget_spent = all.budget_spent || st.budget_spent;
+  };
+  const auto budgeted = [&](CdPathSettings at) {
+    if (ps.max_probe_pieces > 0) at.max_probe_pieces = std::max(1LL, ps.max_probe_pieces - used);
+    return at;
+  };
+  const auto spent = [&] { return all.budget_spent || (ps.max_probe_pieces > 0 && used >= ps.max_probe_pieces); };
+  CdPathSettings interior = ps;
+  interior.start = CdPathStart::interior_point;
+  const auto interior_at = [&](double dt, CdPathStats& st) {
+    ProbeSettings s = settings;
+    s.dt = dt;
+    CdStepSolution x = probe_cd_direct(packing, contact, s, budgeted(interior), &st);
+    account(st, dt);
+    return x;
+  };
+  // The first stage: the step at more inertia.
+  const double target = std::log(settings.dt);
+  double log_dt = target - std::log(ps.inertial_factor);
+  CdStepSolution sol;
+  CdPathStats kept;
+  for (int r = 0; r <= ps.inertial_retries && !spent(); ++r) {
+    if (r > 0) log_dt -= 0.5 * std::log(10.0);
+    CdPathStats st;
+    sol = interior_at(std::exp(log_dt), st);
+    kept = st;
+    if (exact(sol)) break;
+  }
+  all.inertial_dt_start = std::exp(log_dt);
+  CdPathSettings stage = ps;
+  stage.start = CdPathStart::static_network;  // with a guess: the path from the last stage's solution
+  if (exact(sol)) {
+    all.inertial_dt_reached = std::exp(log_dt);
+    const double h0 = (target - log_dt) / ps.inertial_stages;
+    double h = h0;
+    int halvings = 0;
+    while (log_dt < target && !spent()) {
+      const double next = h >= target - log_dt ? target : log_dt + h;
+      ProbeSettings s = settings;
+      s.dt = next == target ? settings.dt : std::exp(next);
+      const CdStepProblem pb = build_cd_step(packing, contact, s);
+      const CdStepGuess guess = solution_guess(packing, pb, sol);
+      CdPathStats st;
+      CdStepSolution x = probe_from_start(packing, pb, s, budgeted(stage), &st, nullptr, false, &guess);
+      account(st, s.dt);
+      ++all.inertial_stages;
+      if (!exact(x) && halvings < ps.inertial_halvings) {  // a smaller step in dt
+        h *= 0.5;
+        ++halvings;
+        continue;
+      }
+      if (!exact(x)) {  // a fold of the branch in dt: the interior-point start jumps to another branch
+        if (spent() || all.inertial_jumps >= ps.inertial_jumps) break;
+        st = CdPathStats{};
+        x = interior_at(s.dt, st);
+        ++all.inertial_jumps;
+        if (!exact(x)) break;
+      }
+      sol = std::move(x);
+      kept = std::move(st);
+      log_dt = next;
+      all.inertial_dt_reached = s.dt;
+      h = std::min(h0, 1.5 * h);
+      halvings = 0;
+    }
+  }
+  // Where the continuation ends short of the probe's dt: the interior-point start there.
+  if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
+    all.inertial_fallback = true;
+    sol = CdStepSolution{};
+    if (!spent()) {
+      CdPathStats st;
+      sol = interior_at(settings.dt, st);
+      kept = std::move(st);
+    }
+    if (sol.f.size() == 0 || residual(sol) > kMaxPathResidual) {
+      const CdStepProblem pb = build_cd_step(packing, contact, settings);
+      sol.f.resize(0);
+      sol.result = cd_step_result(pb, packing, settings, sol.f);
+    }
+  }
+  kept.paths = std::move(paths);
+  kept.attempts = static_cast<int>(kept.paths.size());
+  kept.pieces_all = used;
+  kept.budget_spent = all.budget_spent;
+  kept.inertial_dt_start = all.inertial_dt_start;
+  kept.inertial_dt_reached = all.inertial_dt_reached;
+  kept.inertial_stages = all.inertial_stages;
+  kept.inertial_jumps = all.inertial_jumps;
+  kept.inertial_fallback = all.inertial_fallback;
+  if (kept.budget_spent && !exact(sol)) kept.failure = "budget";
+  kept.accepted = sol.f.size() > 0 && !sol.result.converged && !kept.budget_spent &&
+                  sol.residual.max() <= ps.accept_residual;
+  sol.result.sweeps = kept.budget_spent ? std::max(used, ps.max_probe_pieces + 1) : used;
+  kept.pieces_all = sol.result.sweeps;
+  if (stats_out) *stats_out = std::move(kept);
+  return sol;
+}
+
+}  // namespace
+
+CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
+                             const CdPathSettings& ps, CdPathStats* stats_out) {
+  if (ps.start == CdPathStart::inertial) return probe_cd_inertial(packing, contact, settings, ps, stats_out);
+  return probe_cd_direct(packing, contact, settings, ps, stats_out);
 }
 
 }  // namespace unjam

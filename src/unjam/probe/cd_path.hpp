@@ -53,7 +53,10 @@ namespace unjam {
 // step by step to the rigid step's: the rigid limit of the step with stiff contacts.
 // Or the iterate of an interior-point method on the step (solver/interior_point), where the
 // path starts at interior_compliance (docs/probe.md, "An interior-point start").
-enum class CdPathStart { static_network, lp_optimum, compliant, interior_point };
+// Or the step's quasi-static limit followed from a step with more inertia (inertial): solved by
+// the interior-point start at a smaller dt, then continued in dt to the probe's own
+// (docs/probe.md, "The quasi-static step as the limit of vanishing inertia").
+enum class CdPathStart { static_network, lp_optimum, compliant, interior_point, inertial };
 
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
@@ -154,6 +157,24 @@ struct CdPathSettings {
   // next softer start (`--cd-lost-factor`; docs/probe.md, "Paths that lose their digits").
   // 0 (the default): off, such a path is lowered and restarted below as any other.
   double lost_factor = 0.0;
+  // CdPathStart::inertial (docs/probe.md, "The quasi-static step as the limit of vanishing
+  // inertia"). The step depends on dt only through g / dt^2 (the inertia m g / dt^2 of its
+  // grains). It is solved first at dt / inertial_factor (inertial_factor^2 times the inertia)
+  // by the interior-point start (with its settings above), where that is not exact again at
+  // sqrt(10) times less dt, up to inertial_retries times; then continued in dt up to the
+  // probe's own: each stage is the path from the last stage's solution (as the static start's,
+  // at `compliance` and its retries), with log dt advanced by at most log(inertial_factor) /
+  // inertial_stages (1.5 times the last step after a stage that is exact), halved where a stage
+  // is not exact, up to inertial_halvings times in a row. Past them the branch of solutions
+  // turns back in dt (a fold), and the interior-point start at the next dt jumps to another
+  // branch, up to inertial_jumps times (near some folds the branches it jumps to fold again at
+  // once). Where the continuation ends short of the probe's dt, the interior-point start at the
+  // probe's dt follows. Every stage shares max_probe_pieces.
+  double inertial_factor = 10.0;
+  int inertial_stages = 4;
+  int inertial_halvings = 3;
+  int inertial_retries = 1;
+  int inertial_jumps = 8;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -174,6 +195,7 @@ struct CdPathAttempt {
   int factorizations = 0;           // of the reduced system along it, its lowerings included
   double cpu_seconds = 0.0;         // CPU time of the thread that followed it (s); for the
                                     // user to see where a probe's time went, never a result
+  double dt = 0.0;  // inertial start: the time step of the step it solved (t0; 0: the probe's own)
 };
 
 struct CdPathStats {
@@ -202,6 +224,12 @@ struct CdPathStats {
   int interior_again_iterations = 0, interior_again_short_steps = 0;
   double interior_again_residual = 0.0;
   bool interior_again_kept = false;
+  // inertial: the time steps of the continuation in dt (t0): where it started, the last it
+  // solved exactly (the probe's own where it got there), and its stages (each a path from the
+  // last stage's solution, or an interior-point start past a fold in dt: inertial_jumps)
+  double inertial_dt_start = 0.0, inertial_dt_reached = 0.0;
+  int inertial_stages = 0, inertial_jumps = 0;
+  bool inertial_fallback = false;  // the continuation ended short: the interior-point start at the probe's dt
   int restarts = 0;           // compliant: paths followed after the first (restarts below where a
                               // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the

@@ -148,8 +148,17 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
 // The cd method with a compliant continuation: the compliant start, or the interior-point
 // start, which falls back to it (docs/probe.md, "An interior-point start").
 bool has_continuation(const CampaignSettings& s) {
+  return s.method == ProbeMethod::kCd && (s.cd.start == CdPathStart::compliant ||
+                                          s.cd.start == CdPathStart::interior_point ||
+                                          s.cd.start == CdPathStart::inertial);
+}
+
+// The cd method with the interior-point start: that start, or the inertial start, whose first
+// stage, jumps and fallback are interior-point starts (docs/probe.md, "The quasi-static step
+// as the limit of vanishing inertia").
+bool has_interior(const CampaignSettings& s) {
   return s.method == ProbeMethod::kCd &&
-         (s.cd.start == CdPathStart::compliant || s.cd.start == CdPathStart::interior_point);
+         (s.cd.start == CdPathStart::interior_point || s.cd.start == CdPathStart::inertial);
 }
 
 }  // namespace
@@ -194,6 +203,7 @@ const char* cd_start_name(CdPathStart start) {
     case CdPathStart::lp_optimum: return "lp";
     case CdPathStart::compliant: return "compliant";
     case CdPathStart::interior_point: return "interior";
+    case CdPathStart::inertial: return "inertial";
     case CdPathStart::static_network: break;
   }
   return "static";
@@ -201,9 +211,9 @@ const char* cd_start_name(CdPathStart start) {
 
 CdPathStart cd_start_from_name(const std::string& name) {
   for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum, CdPathStart::compliant,
-                        CdPathStart::interior_point})
+                        CdPathStart::interior_point, CdPathStart::inertial})
     if (name == cd_start_name(s)) return s;
-  throw Error("--cd-start must be static, lp, compliant or interior (got '" + name + "')");
+  throw Error("--cd-start must be static, lp, compliant, interior or inertial (got '" + name + "')");
 }
 
 CampaignSettings campaign_settings_for(const Packing& p) {
@@ -586,7 +596,7 @@ nlohmann::json to_json(const CampaignSettings& s) {
       j["cd_compliant_start"] = s.cd.compliant_start;
     if (has_continuation(s) && s.cd.restart_floor > 0.0)
       j["cd_restart_floor"] = s.cd.restart_floor;  // recorded where set, as cd_start
-    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
+    if (has_interior(s)) {
       // The first path from the iterate's own states (docs/probe.md, "The iterate's own
       // states"), its cut where it stops gaining ground and its retries at softer compliances:
       // each recorded where on, so that a checkpoint made without it is not resumed with it, nor
@@ -668,7 +678,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
         s.cd.compliant_start = number("cd_compliant_start", kUnrecordedCompliantStart);
         s.cd.restart_floor = number("cd_restart_floor", 0.0);
       }
-      if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_point) {
+      if (has_interior(s)) {
         s.cd.interior_states_pieces = number("cd_interior_states_pieces", 0.0);
         s.cd.interior_states_stall = static_cast<int>(integer("cd_interior_states_stall", 0));
         s.cd.interior_states_retries = static_cast<int>(integer("cd_interior_states_retries", 0));
