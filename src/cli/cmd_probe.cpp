@@ -204,7 +204,11 @@ void print_cd_paths(const CdPathStats& stats) {
                 "%s\n",
                 stats.interior_again_iterations, stats.interior_again_short_steps, stats.interior_again_residual,
                 stats.interior_again_kept ? "its iterate is the start" : "the first iterate is the start");
-  if (stats.inertial_dt_start > 0.0)
+  if (stats.inertial_dt_start > 0.0 && stats.inertial_dt_reached == 0.0)
+    std::printf("  inertial start: the step at dt %.3g (the last tried) not solved exactly; then the interior-point "
+                "start at the probe's dt\n",
+                stats.inertial_dt_start);
+  else if (stats.inertial_dt_start > 0.0)
     std::printf("  inertial start: the step at dt %.3g, continued in dt to %.3g in %d stages (%d interior-point "
                 "starts past folds in dt)%s\n",
                 stats.inertial_dt_start, stats.inertial_dt_reached, stats.inertial_stages, stats.inertial_jumps,

@@ -1060,8 +1060,10 @@ CdStepSolution probe_from_start(const Packing& packing, const CdStepProblem& pb,
 // kept and every path is listed.
 namespace {
 
+// With continuation false, the interior-point start's paths only, without the compliant
+// continuation that follows them (the inertial start's stages).
 CdStepSolution probe_cd_direct(const Packing& packing, int contact, const ProbeSettings& settings,
-                               const CdPathSettings& ps, CdPathStats* stats_out) {
+                               const CdPathSettings& ps, CdPathStats* stats_out, bool continuation = true) {
   const CdStepProblem pb = build_cd_step(packing, contact, settings);
   std::optional<InteriorIterates> iterates;
   const double interior_cpu_start = thread_cpu_seconds();
@@ -1092,7 +1094,7 @@ CdStepSolution probe_cd_direct(const Packing& packing, int contact, const ProbeS
     if (iterates->other) follow_on(ps, &*iterates->other);
     CdPathSettings compliant = ps;
     compliant.start = CdPathStart::compliant;
-    follow_on(compliant, nullptr);
+    if (continuation) follow_on(compliant, nullptr);
     kept.paths = std::move(paths);
     kept.attempts = static_cast<int>(kept.paths.size());
     kept.pieces_all = used;
@@ -1161,10 +1163,12 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
   const auto spent = [&] { return all.budget_spent || (ps.max_probe_pieces > 0 && used >= ps.max_probe_pieces); };
   CdPathSettings interior = ps;
   interior.start = CdPathStart::interior_point;
+  // The stages before the probe's own dt take the interior-point start's paths only; its
+  // compliant continuation, which may spend most of a budget, is kept for the last fallback.
   const auto interior_at = [&](double dt, CdPathStats& st) {
     ProbeSettings s = settings;
     s.dt = dt;
-    CdStepSolution x = probe_cd_direct(packing, contact, s, budgeted(interior), &st);
+    CdStepSolution x = probe_cd_direct(packing, contact, s, budgeted(interior), &st, dt == settings.dt);
     account(st, dt);
     return x;
   };

@@ -160,16 +160,17 @@ struct CdPathSettings {
   // CdPathStart::inertial (docs/probe.md, "The quasi-static step as the limit of vanishing
   // inertia"). The step depends on dt only through g / dt^2 (the inertia m g / dt^2 of its
   // grains). It is solved first at dt / inertial_factor (inertial_factor^2 times the inertia)
-  // by the interior-point start (with its settings above), where that is not exact again at
+  // by the interior-point start's paths (with its settings above, but not the compliant
+  // continuation that follows them: it may spend most of a budget), where that is not exact again at
   // sqrt(10) times less dt, up to inertial_retries times; then continued in dt up to the
   // probe's own: each stage is the path from the last stage's solution (as the static start's,
   // at `compliance` and its retries), with log dt advanced by at most log(inertial_factor) /
   // inertial_stages (1.5 times the last step after a stage that is exact), halved where a stage
   // is not exact, up to inertial_halvings times in a row. Past them the branch of solutions
-  // turns back in dt (a fold), and the interior-point start at the next dt jumps to another
+  // turns back in dt (a fold), and the interior-point start's paths at the next dt jump to another
   // branch, up to inertial_jumps times (near some folds the branches it jumps to fold again at
   // once). Where the continuation ends short of the probe's dt, the interior-point start at the
-  // probe's dt follows. Every stage shares max_probe_pieces.
+  // probe's dt follows, with its compliant continuation. Every stage shares max_probe_pieces.
   double inertial_factor = 10.0;
   int inertial_stages = 4;
   int inertial_halvings = 3;
