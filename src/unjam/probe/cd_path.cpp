@@ -807,6 +807,24 @@ CdStepSolution follow(const CdStepProblem& pb, const Packing& packing, const CdP
 
 }  // namespace
 
+namespace {
+
+// A probe's field as the step's displacement q: each grain's displacement and rotation times
+// radius, and the cell's lambda dt in the pressure row (the order of pb's system).
+Eigen::VectorXd step_displacements(const Packing& packing, const CdStepProblem& pb, const ProbeResult& r) {
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(pb.system.A.rows());
+  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
+    const int id = pb.system.grains[i];
+    q[3 * i] = r.u[id].x();
+    q[3 * i + 1] = r.u[id].y();
+    q[3 * i + 2] = r.u_rot[id] * packing.particles.radius[id];
+  }
+  q[pb.system.pressure_row()] = r.lambda_dt;
+  return q;
+}
+
+}  // namespace
+
 CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, const ProbeSettings& settings) {
   KinematicProbeSettings ks;
   ks.g = pb.g;
@@ -824,14 +842,7 @@ CdStepGuess lp_optimum_guess(const Packing& packing, const CdStepProblem& pb, co
     guess.f[2 * kc] = net.fn[k];
     guess.f[2 * kc + 1] = sys.mu > 0.0 ? net.ft[k] : 0.0;
   }
-  guess.q = Eigen::VectorXd::Zero(pb.system.A.rows());
-  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
-    const int id = pb.system.grains[i];
-    guess.q[3 * i] = r.u[id].x();
-    guess.q[3 * i + 1] = r.u[id].y();
-    guess.q[3 * i + 2] = r.u_rot[id] * packing.particles.radius[id];
-  }
-  guess.q[pb.system.pressure_row()] = r.lambda_dt;
+  guess.q = step_displacements(packing, pb, r);
   return guess;
 }
 
@@ -1116,14 +1127,7 @@ CdStepGuess solution_guess(const Packing& packing, const CdStepProblem& pb, cons
   CdStepGuess guess;
   guess.f = sol.f;
   const ProbeResult& r = sol.result;
-  guess.q = Eigen::VectorXd::Zero(pb.system.A.rows());
-  for (std::size_t i = 0; i < pb.system.grains.size(); ++i) {
-    const int id = pb.system.grains[i];
-    guess.q[3 * i] = r.u[id].x();
-    guess.q[3 * i + 1] = r.u[id].y();
-    guess.q[3 * i + 2] = r.u_rot[id] * packing.particles.radius[id];
-  }
-  guess.q[pb.system.pressure_row()] = r.lambda_dt;
+  guess.q = step_displacements(packing, pb, r);
   return guess;
 }
 
