@@ -84,8 +84,8 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "disks another solution than static's) or interior (the iterate of an interior-point method on the step: "
                   "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\") or "
                   "inertial (the interior start on the step at a tenth of dt, more inertia, continued in dt to the "
-                  "quasi-static step: the limit of vanishing inertia; solves probes that the others do not at high "
-                  "friction; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\")")
+                  "quasi-static step: the limit of vanishing inertia; another selection, which solves some probes the "
+                  "others do not and loses others under a budget; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\")")
       ->capture_default_str();
   cmd->add_option(
       "--cd-softer-starts", cd.softer_starts,
