@@ -1126,8 +1126,7 @@ CdStepSolution probe_cd_direct(const Packing& packing, int contact, const ProbeS
 CdStepGuess solution_guess(const Packing& packing, const CdStepProblem& pb, const CdStepSolution& sol) {
   CdStepGuess guess;
   guess.f = sol.f;
-  const ProbeResult& r = sol.result;
-  guess.q = step_displacements(packing, pb, r);
+  guess.q = step_displacements(packing, pb, sol.result);
   return guess;
 }
 
@@ -1151,7 +1150,6 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
   std::vector<CdPathAttempt> paths;
   long long used = 0;
   const auto exact = [](const CdStepSolution& x) { return x.f.size() > 0 && x.residual.max() <= kExactStepTolerance; };
-  const auto residual = [](const CdStepSolution& x) { return x.f.size() > 0 ? x.residual.max() : kNoSolution; };
   // Each stage within what is left of the budget; its paths listed with their dt (0: the
   // probe's own). The returned stage's statistics are the probe's, its paths all of them.
   const auto account = [&](CdPathStats& st, double dt) {
@@ -1185,7 +1183,7 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     if (r > 0) log_dt -= 0.5 * std::log(10.0);
     CdPathStats st;
     sol = interior_at(std::exp(log_dt), st);
-    kept = st;
+    kept = std::move(st);
     if (exact(sol)) break;
   }
   all.inertial_dt_start = std::exp(log_dt);
@@ -1229,21 +1227,17 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
   // Where the continuation ends short of the probe's dt: the interior-point start there.
   if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
     all.inertial_fallback = true;
-    sol = CdStepSolution{};
     if (!spent()) {
       CdPathStats st;
-      sol = interior_at(settings.dt, st);
+      sol = interior_at(settings.dt, st);  // its result is the probe's, with or without a solution
       kept = std::move(st);
-    }
-    if (sol.f.size() == 0 || residual(sol) > kMaxPathResidual) {
-      const CdStepProblem pb = build_cd_step(packing, contact, settings);
-      sol.f.resize(0);
-      sol.result = cd_step_result(pb, packing, settings, sol.f);
+    } else {  // the budget is spent: no solution of the probe's step
+      sol = CdStepSolution{};
+      sol.result = cd_step_result(build_cd_step(packing, contact, settings), packing, settings, sol.f);
     }
   }
   kept.paths = std::move(paths);
   kept.attempts = static_cast<int>(kept.paths.size());
-  kept.pieces_all = used;
   kept.budget_spent = all.budget_spent;
   kept.inertial_dt_start = all.inertial_dt_start;
   kept.inertial_dt_reached = all.inertial_dt_reached;

@@ -145,20 +145,18 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
   return [a, b] { return a() || b(); };
 }
 
-// The cd method with a compliant continuation: the compliant start, or the interior-point
-// start, which falls back to it (docs/probe.md, "An interior-point start").
-bool has_continuation(const CampaignSettings& s) {
-  return s.method == ProbeMethod::kCd && (s.cd.start == CdPathStart::compliant ||
-                                          s.cd.start == CdPathStart::interior_point ||
-                                          s.cd.start == CdPathStart::inertial);
-}
-
 // The cd method with the interior-point start: that start, or the inertial start, whose first
 // stage, jumps and fallback are interior-point starts (docs/probe.md, "The quasi-static step
 // as the limit of vanishing inertia").
 bool has_interior(const CampaignSettings& s) {
   return s.method == ProbeMethod::kCd &&
          (s.cd.start == CdPathStart::interior_point || s.cd.start == CdPathStart::inertial);
+}
+
+// The cd method with a compliant continuation: the compliant start, or a start with the
+// interior-point start, which falls back to it (docs/probe.md, "An interior-point start").
+bool has_continuation(const CampaignSettings& s) {
+  return has_interior(s) || (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::compliant);
 }
 
 }  // namespace
