@@ -109,7 +109,8 @@ def parse_args(argv):
                    "and 1.2-4.7 times faster than compliant there; compliant: the rigid limit of "
                    "stiff contacts followed from the static network; static: the branch from "
                    "the static network; inertial: the step with more inertia followed in dt to the "
-                   "quasi-static one; docs/probe.md, \"Where the path starts\", \"An "
+                   "quasi-static one; interior-inertial: interior, and where it is not exact the "
+                   "inertial start's continuation; docs/probe.md, \"Where the path starts\", \"An "
                    "interior-point start\")")
     p.add_argument("--cd-max-n", type=int, help="the exact probe runs on packings of at most "
                    "this many disks (default 500: its reach with friction, docs/probe.md)")

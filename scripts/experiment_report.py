@@ -125,6 +125,8 @@ START_WORDS = {
     "static": "the path from the static network, ",
     "inertial": "the step at a tenth of dt followed in dt to the quasi-static one (the limit of vanishing "
                 "inertia), ",
+    "interior-inertial": "the path from an interior-point iterate of the step, and where it is not exact the "
+                         "step at a tenth of dt followed in dt to the quasi-static one, ",
 }
 
 

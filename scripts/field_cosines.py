@@ -2,7 +2,7 @@
 
 Usage:  /usr/bin/python3 scripts/field_cosines.py PACKING
                      (--contacts K [K ...] | --from-campaign PROBES_CSV [--limit M])
-                     [--cd-start static|compliant|interior|inertial] [--cd-max-pieces M]
+                     [--cd-start static|compliant|interior|inertial|interior-inertial] [--cd-max-pieces M]
                      [--cd-compliant-start C] [--g G] [--dt DT] [--threads T]
                      [--running-every S] [--out DIR]
 
@@ -96,7 +96,7 @@ def parse(argv):
     sel.add_argument("--from-campaign", metavar="PROBES_CSV",
                      help="the contacts of a campaign's probes.csv, in its order")
     ap.add_argument("--limit", type=int, help="with --from-campaign: the first M contacts only")
-    ap.add_argument("--cd-start", choices=("static", "compliant", "interior", "inertial"),
+    ap.add_argument("--cd-start", choices=("static", "compliant", "interior", "inertial", "interior-inertial"),
                     help="where the exact probe's path starts (default compliant; interior: from "
                          "an interior-point iterate, faster at 500 disks and beyond: docs/probe.md, "
                          "\"Where the path starts\", \"An interior-point start\"); a cd "

@@ -448,6 +448,71 @@ TEST(CdPath, InertialStartFallsBackWhereItsContinuationFolds) {
   }
 }
 
+TEST(CdPath, InteriorInertialStartTakesTheInteriorStartFirstAndTheContinuationInDtWhereItIsNotExact) {
+  // p200-mu1, contact 0 (the test above): the interior-point start is exact in 99 pieces, and
+  // the interior-inertial start returns it as it is. Within a budget of 150 pieces the
+  // interior-point start has half (75: not exact) and the continuation in dt the rest: it
+  // reaches the quasi-static step's other solution, 2.844066 F0, in 41 pieces.
+  const Packing& p = fixture("p200-mu1");
+  const ProbeSettings qs = quasi_static_step();
+  CdPathSettings interior;
+  interior.start = CdPathStart::interior_point;
+  CdPathSettings both;
+  both.start = CdPathStart::interior_inertial;
+  CdPathStats si, sb;
+  const CdStepSolution i0 = probe_cd_path(p, 0, qs, interior, &si);
+  const CdStepSolution b0 = probe_cd_path(p, 0, qs, both, &sb);
+  EXPECT_LE(b0.residual.max(), kExactStepTolerance);
+  EXPECT_EQ(b0.result.f_crit, i0.result.f_crit);
+  EXPECT_EQ(b0.result.sweeps, i0.result.sweeps);
+  EXPECT_EQ(sb.paths.size(), si.paths.size());
+  EXPECT_EQ(sb.inertial_dt_start, 0.0);  // no continuation in dt
+  EXPECT_EQ(sb.inertial_stages, 0);
+  CdPathSettings budget = both;
+  budget.max_probe_pieces = 150;
+  CdPathStats st;
+  const CdStepSolution s0 = probe_cd_path(p, 0, qs, budget, &st);
+  EXPECT_LE(s0.residual.max(), kExactStepTolerance);
+  EXPECT_TRUE(s0.result.converged);
+  EXPECT_LE(cd_step_residual(build_cd_step(p, 0, qs), s0.f).max(), kExactStepTolerance);
+  EXPECT_NEAR(s0.result.f_crit / p.force_unit(), 2.844066, 1e-6);
+  EXPECT_FALSE(st.budget_spent);
+  EXPECT_EQ(st.inertial_dt_reached, qs.dt);
+  EXPECT_EQ(st.inertial_stages, budget.inertial_stages);
+  EXPECT_FALSE(st.inertial_fallback);
+  // the interior-point start's paths first (at the probe's dt, the last stopped by its share
+  // of the budget), then the continuation's, from a tenth of dt
+  ASSERT_GE(st.paths.size(), 4u);
+  long long first = 0;
+  std::size_t i = 0;
+  for (; i < st.paths.size() && st.paths[i].dt == 0.0; ++i) first += st.paths[i].pieces;
+  ASSERT_LT(i, st.paths.size());
+  EXPECT_EQ(st.paths[i - 1].failure, "budget");
+  EXPECT_EQ(first, std::llround(budget.interior_share * 150));
+  EXPECT_DOUBLE_EQ(st.paths[i].dt, qs.dt / budget.inertial_factor);
+  EXPECT_EQ(s0.result.sweeps, 116);
+  EXPECT_EQ(st.pieces_all, 116);
+  // Contact 3: the interior-point start is exact in 6 pieces; with a budget of 10 its share
+  // (5) is spent, the continuation's rest too, and the probe has no solution.
+  budget.max_probe_pieces = 10;
+  CdPathStats s3;
+  const CdStepSolution b3 = probe_cd_path(p, 3, qs, budget, &s3);
+  EXPECT_EQ(b3.f.size(), 0);
+  EXPECT_FALSE(b3.result.converged);
+  EXPECT_TRUE(s3.budget_spent);
+  EXPECT_TRUE(s3.inertial_fallback);  // the interior-point start's result (none) kept
+  EXPECT_EQ(s3.failure, "budget");
+  EXPECT_EQ(b3.result.sweeps, 11);
+  // its name, and the shares it refuses
+  EXPECT_EQ(cd_start_from_name("interior-inertial"), CdPathStart::interior_inertial);
+  EXPECT_STREQ(cd_start_name(CdPathStart::interior_inertial), "interior-inertial");
+  for (const double share : {0.0, 1.0, -0.5, std::nan("")}) {
+    CdPathSettings bad = both;
+    bad.interior_share = share;
+    EXPECT_THROW(probe_cd_path(p, 3, qs, bad), Error) << share;
+  }
+}
+
 TEST(CdPath, EachPathReportsItsFactorisationsAndItsCpuTime) {
   // The continuation of contact 68 of p100-frozen-mu1 and its restarts (no solution, the test
   // below): every path that took a piece factorised the system at least once and took CPU

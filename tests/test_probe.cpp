@@ -589,6 +589,21 @@ TEST(ProbeCampaign, SettingsRecordsThatUnjamWouldNotWriteAreRefused) {
   refused("unknown method", [](nlohmann::json& j) { j["method"] = "dem"; }, "--method must be");
   refused("unknown start", [](nlohmann::json& j) { j["cd_start"] = "middle"; }, "--cd-start must be");
   refused("unknown displacement", [](nlohmann::json& j) { j["displacement"] = "affine"; }, "displacement must be");
+  refused("the interior-inertial start's share on another start", [](nlohmann::json& j) { j["cd_interior_share"] = 0.5; },
+          "cd_interior_share");
+  // The interior-inertial start records its share of the budget always (a checkpoint made with
+  // one share resumes with that share only), and a record without it is refused.
+  CampaignSettings both = cd;
+  both.cd.start = CdPathStart::interior_inertial;
+  both.cd.interior_share = 0.7;
+  const nlohmann::json both_json = to_json(both);
+  EXPECT_EQ(both_json.at("cd_interior_share").get<double>(), 0.7);
+  EXPECT_EQ(campaign_settings_from_json(both_json, p, "the record").cd.interior_share, 0.7);
+  both.cd.interior_share = CdPathSettings{}.interior_share;
+  EXPECT_EQ(to_json(both).at("cd_interior_share").get<double>(), 0.5);
+  nlohmann::json without = both_json;
+  without.erase("cd_interior_share");
+  EXPECT_THROW((void)campaign_settings_from_json(without, p, "the record"), Error);
   refused("a cd setting on nlgs", [](nlohmann::json& j) {
     j["method"] = "nlgs";
     j["velocity_tol"] = 1e-6;

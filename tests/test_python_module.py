@@ -474,7 +474,7 @@ def test_the_exact_probe_takes_its_start_as_the_tool(tmp_path):
     interior = unjam.probe(p, contact=14, method="cd", cd_start="interior")
     assert interior.converged
     assert [[float(x["ux"]), float(x["uy"])] for x in read_csv(tmp_path / "ip" / "probe-14.csv")] == interior.u.tolist()
-    with pytest.raises(unjam.Error, match="must be static, lp, compliant, interior or inertial"):
+    with pytest.raises(unjam.Error, match="must be static, lp, compliant, interior, inertial or interior-inertial"):
         unjam.probe(p, contact=14, method="cd", cd_start="soft")
     with pytest.raises(unjam.Error, match="the cd start 'compliant' applies to the cd method only"):
         unjam.probe(p, contact=14, method="lp", cd_start="compliant")
@@ -651,7 +651,7 @@ def test_the_cd_settings_are_one_typed_object():
         ("static", 0.1, 2, 0, 1e-6)
     assert (d.interior_states_pieces, d.interior_states_stall, d.interior_states_retries,
             d.interior_iterations, d.interior_neighbourhood, d.settle_compliance, d.lost_factor,
-            d.restart_floor) == (0.1, 20, 2, 100, 0.0, 0.0, 0.0, 0.0)
+            d.restart_floor, d.interior_share) == (0.1, 20, 2, 100, 0.0, 0.0, 0.0, 0.0, 0.5)
     s = unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert s != d and s == unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
@@ -675,7 +675,9 @@ def test_the_cd_settings_are_one_typed_object():
                                   ("lost_factor", float("inf"), "--cd-lost-factor must be >= 0"),
                                   ("restart_floor", -1e-5, "--cd-restart-floor must be >= 0"),
                                   ("restart_floor", float("nan"), "--cd-restart-floor must be >= 0"),
-                                  ("start", "soft", "--cd-start must be static, lp, compliant, interior or inertial")]:
+                                  ("interior_share", 0.0, r"--cd-interior-share must be in \(0, 1\)"),
+                                  ("interior_share", 1.0, r"--cd-interior-share must be in \(0, 1\)"),
+                                  ("start", "soft", "--cd-start must be static, lp, compliant, interior, inertial or interior-inertial")]:
         t = copy.copy(s)
         with pytest.raises(unjam.Error, match=message):
             setattr(t, field, value)
@@ -702,7 +704,8 @@ def test_the_cd_settings_are_one_typed_object():
     # exact solution below a compliance of 1e-5, in 8 pieces against 134 (docs/probe.md,
     # "Settling at an exact solution"); pickled and compared with the other fields.
     settled = unjam.CdSettings(start="compliant", settle_compliance=1e-5)
-    assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0, restart_floor=0.0)")
+    assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0, restart_floor=0.0, "
+                                  "interior_share=0.5)")
     assert pickle.loads(pickle.dumps(settled)) == settled
     assert settled != unjam.CdSettings(start="compliant")
     a = unjam.probe(p, contact=34, method="cd", cd=settled)
@@ -723,6 +726,17 @@ def test_the_cd_settings_are_one_typed_object():
     assert unjam.probe(p, contact=8, method="cd", cd=floored).sweeps != 279
     with pytest.raises(unjam.Error, match="applies to the cd method's compliant and interior starts only"):
         unjam.probe(p, contact=8, method="cd", cd=unjam.CdSettings(restart_floor=1e-3))
+    # interior_share (`--cd-interior-share`, the interior-inertial start only): contact 0 within
+    # 150 pieces, the interior start's share 75 (not exact there) and the continuation in dt's the
+    # rest, reaches 2.844066 F0 in 116 pieces (tests/test_cd_step.cpp); with a share of 0.7
+    # (105) the interior start is exact in its 99 pieces, 2.795944 F0
+    half = unjam.probe(p, contact=0, method="cd", cd=unjam.CdSettings(start="interior-inertial", max_pieces=150))
+    most = unjam.probe(p, contact=0, method="cd",
+                       cd=unjam.CdSettings(start="interior-inertial", max_pieces=150, interior_share=0.7))
+    assert (half.converged, half.sweeps, most.converged, most.sweeps) == (True, 116, True, 99)
+    assert abs(half.f_crit / p.F0 - 2.844066) < 1e-6 and abs(most.f_crit / p.F0 - 2.795944) < 1e-6
+    with pytest.raises(unjam.Error, match="--cd-interior-share applies to the cd method's interior-inertial start only"):
+        unjam.probe(p, contact=0, method="cd", cd=unjam.CdSettings(start="interior", interior_share=0.7))
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -194,7 +194,7 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
 
 // One line per path the cd probe followed (CdPathStats::paths): where it started, how far it
 // got and how it ended, so that a user sees why a probe is or is not exact.
-void print_cd_paths(const CdPathStats& stats) {
+void print_cd_paths(const CdPathStats& stats, CdPathStart start) {
   if (stats.interior_iterations > 0)
     std::printf("  interior-point start: %d iterations, natural residual %.2e (F0, g / dt^2); %s of CPU\n",
                 stats.interior_iterations, stats.interior_residual,
@@ -204,15 +204,21 @@ void print_cd_paths(const CdPathStats& stats) {
                 "%s\n",
                 stats.interior_again_iterations, stats.interior_again_short_steps, stats.interior_again_residual,
                 stats.interior_again_kept ? "its iterate is the start" : "the first iterate is the start");
+  // interior-inertial: the continuation in dt ran after the interior-point start at the probe's
+  // dt, which is the result unless the continuation got there exactly.
+  const bool first = start == CdPathStart::interior_inertial;
+  const char* prefix = first ? "  the interior-point start not exact within its share of the budget; then the " : "  ";
+  const char* after = !stats.inertial_fallback ? ""
+                      : first                  ? "; the interior-point start's result kept"
+                                               : "; then the interior-point start at the probe's dt";
   if (stats.inertial_dt_start > 0.0 && stats.inertial_dt_reached == 0.0)
-    std::printf("  inertial start: the step at dt %.3g (the last tried) not solved exactly; then the interior-point "
-                "start at the probe's dt\n",
-                stats.inertial_dt_start);
+    std::printf("%sinertial start: the step at dt %.3g (the last tried) not solved exactly%s\n", prefix,
+                stats.inertial_dt_start, after);
   else if (stats.inertial_dt_start > 0.0)
-    std::printf("  inertial start: the step at dt %.3g, continued in dt to %.3g in %d stages (%d interior-point "
+    std::printf("%sinertial start: the step at dt %.3g, continued in dt to %.3g in %d stages (%d interior-point "
                 "starts past folds in dt)%s\n",
-                stats.inertial_dt_start, stats.inertial_dt_reached, stats.inertial_stages, stats.inertial_jumps,
-                stats.inertial_fallback ? "; then the interior-point start at the probe's dt" : "");
+                prefix, stats.inertial_dt_start, stats.inertial_dt_reached, stats.inertial_stages,
+                stats.inertial_jumps, after);
   for (std::size_t i = 0; i < stats.paths.size(); ++i) {
     const CdPathAttempt& a = stats.paths[i];
     const char* from = a.other_iterate ? (a.iterate_states ? "from the other iterate's states "
@@ -317,7 +323,7 @@ void run_single(const ProbeOptions& o, const Packing& p, const CampaignSettings&
                 changes->loaded, changes->opened, changes->sliding, kExactStepTolerance, changes->closed,
                 changes->unloaded,
                 (out / ("probe-" + std::to_string(r.contact) + "-forces.csv")).c_str());
-  print_cd_paths(stats);
+  print_cd_paths(stats, s.cd.start);
   // Near-exact within the residual the user accepts: a result, as asked, not an error.
   if (stats.accepted) {
     std::printf("  near-exact: the search stopped at the first solution within --cd-accept-residual %g g "

@@ -85,7 +85,9 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "fewer pieces at low friction; docs/probe.md, \"Where the path starts\", \"An interior-point start\") or "
                   "inertial (the interior start on the step at a tenth of dt, more inertia, continued in dt to the "
                   "quasi-static step: the limit of vanishing inertia; another selection, which solves some probes the "
-                  "others do not and loses others under a budget; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\")")
+                  "others do not and loses others under a budget; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\") "
+                  "or interior-inertial (the interior start within half the budget, then the inertial start's "
+                  "continuation in dt where it is not exact)")
       ->capture_default_str();
   cmd->add_option(
       "--cd-softer-starts", cd.softer_starts,
@@ -132,6 +134,11 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "docs/probe.md, \"Keeping the iterates centred\")")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--cd-interior-share", cd.interior_share,
+                  "cd, interior-inertial start: the fraction of --cd-max-pieces the interior start may take "
+                  "before the inertial start's continuation in dt takes the rest (in (0, 1); docs/probe.md, "
+                  "\"The interior start first, the continuation in dt where it fails\")")
+      ->capture_default_str();
   cmd->add_option("--cd-max-pieces", cd.max_probe_pieces,
                   "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
                   "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "

@@ -47,6 +47,7 @@ py::dict fields(const CdPathSettings& s) {
   d["settle_compliance"] = s.settle_compliance;
   d["lost_factor"] = s.lost_factor;
   d["restart_floor"] = s.restart_floor;
+  d["interior_share"] = s.interior_share;
   return d;
 }
 
@@ -93,13 +94,14 @@ void bind_cd_settings(py::module_& m) {
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                    double settle_compliance, double lost_factor, double restart_floor) {
+                    double settle_compliance, double lost_factor, double restart_floor, double interior_share) {
           CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
                                          interior_states_pieces, interior_states_stall, interior_states_retries,
                                          interior_iterations, interior_neighbourhood);
           s.settle_compliance = settle_compliance;
           s.lost_factor = lost_factor;
           s.restart_floor = restart_floor;
+          s.interior_share = interior_share;
           validate(s);
           return s;
         }),
@@ -112,12 +114,12 @@ void bind_cd_settings(py::module_& m) {
         py::arg("interior_iterations") = d.interior_max_iterations,
         py::arg("interior_neighbourhood") = d.interior_neighbourhood,
         py::arg("settle_compliance") = d.settle_compliance, py::arg("lost_factor") = d.lost_factor,
-        py::arg("restart_floor") = d.restart_floor);
+        py::arg("restart_floor") = d.restart_floor, py::arg("interior_share") = d.interior_share);
   c.def_property(
       "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
       [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
-      "where the path starts: 'static', 'compliant', 'lp' or 'interior' (--cd-start; docs/probe.md, "
-      "\"Where the path starts\")");
+      "where the path starts: 'static', 'compliant', 'lp', 'interior', 'inertial' or 'interior-inertial' "
+      "(--cd-start; docs/probe.md, \"Where the path starts\")");
   checked_field(c, "compliant_start", &CdPathSettings::compliant_start,
                 "the compliance of the compliant continuation's first path, > 0 (--cd-compliant-start; "
                 "docs/probe.md, \"Where the continuation starts\")");
@@ -156,6 +158,10 @@ void bind_cd_settings(py::module_& m) {
                 "the compliance below which the compliant continuation is not restarted (its next softer start "
                 "follows instead), >= 0 (0: every restart; --cd-restart-floor; docs/probe.md, \"Restarts below a "
                 "floor\")");
+  checked_field(c, "interior_share", &CdPathSettings::interior_share,
+                "interior-inertial start: the fraction of max_pieces the interior start may take before the "
+                "continuation in dt takes the rest, in (0, 1) (--cd-interior-share; docs/probe.md, \"The "
+                "interior start first, the continuation in dt where it fails\")");
   c.def("__repr__", &repr);
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });

@@ -1144,6 +1144,8 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     throw Error("cd path: inertial_halvings must be >= 0 (got " + std::to_string(ps.inertial_halvings) + ")");
   if (ps.inertial_retries < 0)
     throw Error("cd path: inertial_retries must be >= 0 (got " + std::to_string(ps.inertial_retries) + ")");
+  if (!(ps.interior_share > 0.0 && ps.interior_share < 1.0))
+    throw Error("cd path: interior_share must be in (0, 1) (got " + std::to_string(ps.interior_share) + ")");
   if (ps.inertial_jumps < 0)
     throw Error("cd path: inertial_jumps must be >= 0 (got " + std::to_string(ps.inertial_jumps) + ")");
   CdPathStats all;
@@ -1174,6 +1176,27 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     account(st, dt);
     return x;
   };
+  // CdPathStart::interior_inertial: the interior-point start at the probe's dt first, within
+  // interior_share of the budget; where it is exact, that is the probe's result, else the
+  // continuation in dt below within what is left, and where that does not reach the probe's dt
+  // exactly, the interior-point start's result.
+  const bool interior_first = ps.start == CdPathStart::interior_inertial;
+  CdStepSolution first;
+  CdPathStats first_stats;
+  if (interior_first) {
+    CdPathSettings at = interior;
+    if (ps.max_probe_pieces > 0)
+      at.max_probe_pieces = std::max(1LL, std::llround(ps.interior_share * static_cast<double>(ps.max_probe_pieces)));
+    first = probe_cd_direct(packing, contact, settings, at, &first_stats);
+    account(first_stats, settings.dt);
+    all.budget_spent = used >= ps.max_probe_pieces && ps.max_probe_pieces > 0;
+    if (exact(first)) {
+      first_stats.paths = std::move(paths);
+      first_stats.attempts = static_cast<int>(first_stats.paths.size());
+      if (stats_out) *stats_out = std::move(first_stats);
+      return first;
+    }
+  }
   // The first stage: the step at more inertia.
   const double target = std::log(settings.dt);
   double log_dt = target - std::log(ps.inertial_factor);
@@ -1210,7 +1233,8 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
         continue;
       }
       if (!exact(x)) {  // a fold of the branch in dt: the interior-point start jumps to another branch
-        if (spent() || all.inertial_jumps >= ps.inertial_jumps) break;
+        // (At the probe's dt after interior_inertial's first start: the same start again.)
+        if (spent() || all.inertial_jumps >= ps.inertial_jumps || (interior_first && s.dt == settings.dt)) break;
         st = CdPathStats{};
         x = interior_at(s.dt, st);
         ++all.inertial_jumps;
@@ -1224,8 +1248,13 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
       halvings = 0;
     }
   }
-  // Where the continuation ends short of the probe's dt: the interior-point start there.
-  if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
+  // Where the continuation ends short of the probe's dt: the interior-point start there (or
+  // its result from before the continuation: interior_inertial).
+  if (interior_first && !(exact(sol) && all.inertial_dt_reached == settings.dt)) {
+    all.inertial_fallback = true;
+    sol = std::move(first);
+    kept = std::move(first_stats);
+  } else if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
     all.inertial_fallback = true;
     if (!spent()) {
       CdPathStats st;
@@ -1257,7 +1286,8 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
 
 CdStepSolution probe_cd_path(const Packing& packing, int contact, const ProbeSettings& settings,
                              const CdPathSettings& ps, CdPathStats* stats_out) {
-  if (ps.start == CdPathStart::inertial) return probe_cd_inertial(packing, contact, settings, ps, stats_out);
+  if (ps.start == CdPathStart::inertial || ps.start == CdPathStart::interior_inertial)
+    return probe_cd_inertial(packing, contact, settings, ps, stats_out);
   return probe_cd_direct(packing, contact, settings, ps, stats_out);
 }
 

@@ -55,8 +55,9 @@ namespace unjam {
 // path starts at interior_compliance (docs/probe.md, "An interior-point start").
 // Or the step's quasi-static limit followed from a step with more inertia (inertial): solved by
 // the interior-point start at a smaller dt, then continued in dt to the probe's own
-// (docs/probe.md, "The quasi-static step as the limit of vanishing inertia").
-enum class CdPathStart { static_network, lp_optimum, compliant, interior_point, inertial };
+// (docs/probe.md, "The quasi-static step as the limit of vanishing inertia"). Or the
+// interior-point start first, and that continuation where it is not exact (interior_inertial).
+enum class CdPathStart { static_network, lp_optimum, compliant, interior_point, inertial, interior_inertial };
 
 struct CdPathSettings {
   CdPathStart start = CdPathStart::static_network;
@@ -176,6 +177,13 @@ struct CdPathSettings {
   int inertial_halvings = 3;
   int inertial_retries = 1;
   int inertial_jumps = 8;
+  // CdPathStart::interior_inertial: the interior-point start (with its compliant continuation)
+  // at the probe's dt first, within interior_share x max_probe_pieces; where it is not exact,
+  // the inertial start's continuation in dt within what is left of max_probe_pieces (without
+  // its fallback: the interior-point start has run), and where that does not reach the probe's
+  // dt exactly, the interior-point start's result (docs/probe.md, "The quasi-static step as the
+  // limit of vanishing inertia").
+  double interior_share = 0.5;
 };
 
 // One path followed by probe_cd_path (the first, a retry or a restart of the continuation):
@@ -231,6 +239,7 @@ struct CdPathStats {
   double inertial_dt_start = 0.0, inertial_dt_reached = 0.0;
   int inertial_stages = 0, inertial_jumps = 0;
   bool inertial_fallback = false;  // the continuation ended short: the interior-point start at the probe's dt
+                                   // (interior_inertial: its result from before the continuation)
   int restarts = 0;           // compliant: paths followed after the first (restarts below where a
                               // lowering stopped, and the softer starts)
   std::string failure;        // why there is no solution: "loop" (the branch through the

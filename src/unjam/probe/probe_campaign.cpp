@@ -150,7 +150,8 @@ std::function<bool()> either(const std::function<bool()>& a, const std::function
 // as the limit of vanishing inertia").
 bool has_interior(const CampaignSettings& s) {
   return s.method == ProbeMethod::kCd &&
-         (s.cd.start == CdPathStart::interior_point || s.cd.start == CdPathStart::inertial);
+         (s.cd.start == CdPathStart::interior_point || s.cd.start == CdPathStart::inertial ||
+          s.cd.start == CdPathStart::interior_inertial);
 }
 
 // The cd method with a compliant continuation: the compliant start, or a start with the
@@ -202,6 +203,7 @@ const char* cd_start_name(CdPathStart start) {
     case CdPathStart::compliant: return "compliant";
     case CdPathStart::interior_point: return "interior";
     case CdPathStart::inertial: return "inertial";
+    case CdPathStart::interior_inertial: return "interior-inertial";
     case CdPathStart::static_network: break;
   }
   return "static";
@@ -209,9 +211,10 @@ const char* cd_start_name(CdPathStart start) {
 
 CdPathStart cd_start_from_name(const std::string& name) {
   for (CdPathStart s : {CdPathStart::static_network, CdPathStart::lp_optimum, CdPathStart::compliant,
-                        CdPathStart::interior_point, CdPathStart::inertial})
+                        CdPathStart::interior_point, CdPathStart::inertial, CdPathStart::interior_inertial})
     if (name == cd_start_name(s)) return s;
-  throw Error("--cd-start must be static, lp, compliant, interior or inertial (got '" + name + "')");
+  throw Error("--cd-start must be static, lp, compliant, interior, inertial or interior-inertial (got '" + name +
+              "')");
 }
 
 CampaignSettings campaign_settings_for(const Packing& p) {
@@ -258,6 +261,8 @@ void validate(const CdPathSettings& cd) {
     throw Error("--cd-interior-iterations must be >= 1 (got " + std::to_string(cd.interior_max_iterations) + ")");
   if (!(cd.interior_neighbourhood >= 0.0 && cd.interior_neighbourhood < 1.0))
     throw Error("--cd-interior-neighbourhood must be in [0, 1) (got " + std::to_string(cd.interior_neighbourhood) + ")");
+  if (!(cd.interior_share > 0.0 && cd.interior_share < 1.0))
+    throw Error("--cd-interior-share must be in (0, 1) (got " + std::to_string(cd.interior_share) + ")");
 }
 
 void validate(const CampaignSettings& s) {
@@ -277,6 +282,9 @@ void validate(const CampaignSettings& s) {
     throw Error("--cd-softer-starts applies to the cd method's compliant and interior starts only");
   if (s.cd.compliant_start != CdPathSettings{}.compliant_start && !has_continuation(s))
     throw Error("--cd-compliant-start applies to the cd method's compliant and interior starts only");
+  if (s.cd.interior_share != CdPathSettings{}.interior_share &&
+      !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_inertial))
+    throw Error("--cd-interior-share applies to the cd method's interior-inertial start only");
   if (s.cd.restart_floor > 0.0 && !has_continuation(s))
     throw Error("--cd-restart-floor applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
@@ -612,6 +620,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
       // with it resumes only with it, and one made without (or before it) only without.
       if (s.cd.interior_neighbourhood > 0.0) j["cd_interior_neighbourhood"] = s.cd.interior_neighbourhood;
     }
+    if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_inertial)
+      j["cd_interior_share"] = s.cd.interior_share;  // recorded with the start it applies to
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kCd && s.cd.accept_residual != CdPathSettings{}.accept_residual)
@@ -637,7 +647,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       "lp_tolerance", "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
       "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
       "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
-      "cd_lost_factor", "cd_restart_floor", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
+      "cd_lost_factor", "cd_restart_floor", "cd_interior_share", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
   for (const auto& [key, value] : j.items())
     if (kKnown.count(key) == 0) throw Error(name + " have a setting this unjam does not know: '" + key + "'");
   CampaignSettings s = campaign_settings_for(p);
@@ -670,6 +680,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
         s.cd.accept_residual = number("cd_accept_residual", CdPathSettings{}.accept_residual);
         s.cd.settle_compliance = number("cd_settle_compliance", 0.0);
         s.cd.lost_factor = number("cd_lost_factor", 0.0);
+        if (s.cd.start == CdPathStart::interior_inertial) s.cd.interior_share = j.at("cd_interior_share").get<double>();
       }
       if (has_continuation(s)) {
         s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));

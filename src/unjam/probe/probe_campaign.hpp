@@ -32,7 +32,7 @@ enum class ProbeMethod {
   kCd,    // the same step followed exactly from the static network (sparse: probe/cd_path)
 };
 
-// "static", "lp", "compliant", "interior", "inertial"; cd_start_from_name throws unjam::Error for any other name.
+// "static", "lp", "compliant", "interior", "inertial", "interior-inertial"; cd_start_from_name throws unjam::Error for any other name.
 const char* cd_start_name(CdPathStart start);
 CdPathStart cd_start_from_name(const std::string& name);
 
