@@ -492,6 +492,19 @@ TEST(CdPath, InteriorInertialStartTakesTheInteriorStartFirstAndTheContinuationIn
   EXPECT_DOUBLE_EQ(st.paths[i].dt, qs.dt / budget.inertial_factor);
   EXPECT_EQ(s0.result.sweeps, 116);
   EXPECT_EQ(st.pieces_all, 116);
+  // Where the user accepts a near-exact solution, the interior-point start's near-exact one
+  // ends the probe as it ends that start's (contact 55: 1.55e-6 g in 172 pieces at 1e-4).
+  CdPathSettings accept = both, accept_interior = interior;
+  accept.accept_residual = accept_interior.accept_residual = 1e-4;
+  CdPathStats sa;
+  const CdStepSolution a55 = probe_cd_path(p, 55, qs, accept, &sa);
+  const CdStepSolution i55 = probe_cd_path(p, 55, qs, accept_interior);
+  EXPECT_GT(a55.residual.max(), kExactStepTolerance);
+  EXPECT_LE(a55.residual.max(), 1e-4);
+  EXPECT_TRUE(sa.accepted);
+  EXPECT_EQ(sa.inertial_dt_start, 0.0);
+  EXPECT_EQ(a55.result.sweeps, i55.result.sweeps);
+  EXPECT_EQ(a55.result.f_crit, i55.result.f_crit);
   // Contact 3: the interior-point start is exact in 6 pieces; with a budget of 10 its share
   // (5) is spent, the continuation's rest too, and the probe has no solution.
   budget.max_probe_pieces = 10;

@@ -1177,9 +1177,9 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     return x;
   };
   // CdPathStart::interior_inertial: the interior-point start at the probe's dt first, within
-  // interior_share of the budget; where it is exact, that is the probe's result, else the
-  // continuation in dt below within what is left, and where that does not reach the probe's dt
-  // exactly, the interior-point start's result.
+  // interior_share of the budget; where it is exact (or within accept_residual), that is the
+  // probe's result, else the continuation in dt below within what is left, and where that does
+  // not reach the probe's dt exactly, the interior-point start's result.
   const bool interior_first = ps.start == CdPathStart::interior_inertial;
   CdStepSolution first;
   CdPathStats first_stats;
@@ -1190,7 +1190,9 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     first = probe_cd_direct(packing, contact, settings, at, &first_stats);
     account(first_stats, settings.dt);
     all.budget_spent = used >= ps.max_probe_pieces && ps.max_probe_pieces > 0;
-    if (exact(first)) {
+    if (first.f.size() > 0 && first.residual.max() <= ps.accept_residual) {
+      first_stats.budget_spent = all.budget_spent;  // the probe's budget, not the share's
+      first_stats.accepted = !exact(first) && !all.budget_spent;
       first_stats.paths = std::move(paths);
       first_stats.attempts = static_cast<int>(first_stats.paths.size());
       if (stats_out) *stats_out = std::move(first_stats);
