@@ -86,7 +86,7 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "inertial (the interior start on the step at a tenth of dt, more inertia, continued in dt to the "
                   "quasi-static step: the limit of vanishing inertia; another selection, which solves some probes the "
                   "others do not and loses others under a budget; docs/probe.md, \"The quasi-static step as the limit of vanishing inertia\") "
-                  "or interior-inertial (the interior start within half the budget, then the inertial start's "
+                  "or interior-inertial (the interior start within --cd-interior-share of the budget, then the inertial start's "
                   "continuation in dt where it is not exact)")
       ->capture_default_str();
   cmd->add_option(

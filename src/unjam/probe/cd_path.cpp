@@ -1189,7 +1189,7 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
       at.max_probe_pieces = std::max(1LL, std::llround(ps.interior_share * static_cast<double>(ps.max_probe_pieces)));
     first = probe_cd_direct(packing, contact, settings, at, &first_stats);
     account(first_stats, settings.dt);
-    all.budget_spent = used >= ps.max_probe_pieces && ps.max_probe_pieces > 0;
+    all.budget_spent = ps.max_probe_pieces > 0 && used >= ps.max_probe_pieces;  // the probe's, not the share's
     if (first.f.size() > 0 && first.residual.max() <= ps.accept_residual) {
       first_stats.budget_spent = all.budget_spent;  // the probe's budget, not the share's
       first_stats.accepted = !exact(first) && !all.budget_spent;
@@ -1235,8 +1235,9 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
         continue;
       }
       if (!exact(x)) {  // a fold of the branch in dt: the interior-point start jumps to another branch
-        // (At the probe's dt after interior_inertial's first start: the same start again.)
-        if (spent() || all.inertial_jumps >= ps.inertial_jumps || (interior_first && s.dt == settings.dt)) break;
+        // (Not at the probe's dt: there the jump would be the interior-point start that follows
+        // the loop, or that interior_inertial ran first.)
+        if (spent() || all.inertial_jumps >= ps.inertial_jumps || s.dt == settings.dt) break;
         st = CdPathStats{};
         x = interior_at(s.dt, st);
         ++all.inertial_jumps;
