@@ -516,6 +516,41 @@ TEST(CdPath, InteriorInertialStartTakesTheInteriorStartFirstAndTheContinuationIn
   EXPECT_TRUE(s3.inertial_fallback);  // the interior-point start's result (none) kept
   EXPECT_EQ(s3.failure, "budget");
   EXPECT_EQ(b3.result.sweeps, 11);
+  // The continuation's settings are honoured: contact 0 within 150 pieces in one stage from a
+  // tenth of dt (inertial_stages 1) reaches the same solution as in four.
+  CdPathSettings one_stage = budget;
+  one_stage.max_probe_pieces = 150;
+  one_stage.inertial_stages = 1;
+  CdPathStats s1;
+  const CdStepSolution o0 = probe_cd_path(p, 0, qs, one_stage, &s1);
+  EXPECT_LE(o0.residual.max(), kExactStepTolerance);
+  EXPECT_NEAR(o0.result.f_crit / p.force_unit(), 2.844066, 1e-6);
+  EXPECT_EQ(s1.inertial_stages, 1);
+  EXPECT_EQ(s1.inertial_dt_reached, qs.dt);
+  // Contact 82 with the interior-point start's share at 100 pieces (of 100 000) and a
+  // continuation from dt / 1000 in one stage, without halvings or jumps: the share is spent at a
+  // near-exact solution (1.37e-6 g), the continuation's one stage is not exact and ends it with
+  // the rest of the budget unspent, and the probe keeps the first result, its failure "share"
+  // (not "budget": the probe's budget was not spent).
+  CdPathSettings short_dt = both;
+  short_dt.max_probe_pieces = 100000;
+  short_dt.interior_share = 0.001;
+  short_dt.inertial_factor = 1000.0;
+  short_dt.inertial_stages = 1;
+  short_dt.inertial_halvings = 0;
+  short_dt.inertial_jumps = 0;
+  CdPathStats s82;
+  const CdStepSolution r82 = probe_cd_path(p, 82, qs, short_dt, &s82);
+  ASSERT_GT(r82.f.size(), 0);
+  EXPECT_GT(r82.residual.max(), kExactStepTolerance);
+  EXPECT_LT(r82.residual.max(), 2e-6);
+  EXPECT_FALSE(r82.result.converged);
+  EXPECT_FALSE(s82.budget_spent);
+  EXPECT_TRUE(s82.inertial_fallback);
+  EXPECT_EQ(s82.failure, "share");
+  EXPECT_NEAR(s82.inertial_dt_start, qs.dt / 1000.0, 1e-12 * qs.dt);
+  EXPECT_EQ(s82.inertial_stages, 1);
+  EXPECT_LT(s82.pieces_all, 100000);
   // its name, and the shares it refuses
   EXPECT_EQ(cd_start_from_name("interior-inertial"), CdPathStart::interior_inertial);
   EXPECT_STREQ(cd_start_name(CdPathStart::interior_inertial), "interior-inertial");
@@ -523,6 +558,15 @@ TEST(CdPath, InteriorInertialStartTakesTheInteriorStartFirstAndTheContinuationIn
     CdPathSettings bad = both;
     bad.interior_share = share;
     EXPECT_THROW(probe_cd_path(p, 3, qs, bad), Error) << share;
+  }
+  // and the continuation's settings it refuses, as the inertial start does
+  for (const auto& set : std::vector<std::function<void(CdPathSettings&)>>{
+           [](CdPathSettings& s) { s.inertial_factor = 1.0; }, [](CdPathSettings& s) { s.inertial_stages = 0; },
+           [](CdPathSettings& s) { s.inertial_halvings = -1; }, [](CdPathSettings& s) { s.inertial_retries = -1; },
+           [](CdPathSettings& s) { s.inertial_jumps = -1; }}) {
+    CdPathSettings bad = both;
+    set(bad);
+    EXPECT_THROW(probe_cd_path(p, 3, qs, bad), Error);
   }
 }
 

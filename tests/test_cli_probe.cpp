@@ -952,6 +952,29 @@ TEST_F(CliProbe, SaysWhereTheCompliantContinuationStopped) {
       << low.output;
 }
 
+TEST_F(CliProbe, RecordsTheContinuationInDtsSettingsAndSaysWhereItEndedShort) {
+  // The continuation in dt's settings (--cd-inertial-*) are recorded where set, and a checkpoint
+  // made with one does not resume without it (docs/probe.md, "The quasi-static step as the
+  // limit of vanishing inertia").
+  const fs::path p200 = fs::path(UNJAM_FIXTURES_DIR) / "p200-mu1";
+  const std::string campaign =
+      "probe " + q(p200) + " --sample 2 --seed 1 --method cd --cd-start inertial --cd-max-pieces 150 --quiet --threads 1 ";
+  expect_recorded_where_set(campaign, "--cd-inertial-jumps 2", "cd_inertial_jumps", 2);
+  expect_recorded_where_set(campaign, "--cd-inertial-factor 3", "cd_inertial_factor", 3.0);
+  // Contact 82 (tests/test_cd_step.cpp): the interior start's share of 100 pieces spent at a
+  // near-exact solution, the continuation's one stage from dt / 1000 not exact, the rest of the
+  // budget unspent. The probe says so and exits 1.
+  const testing::ToolRun r = run_tool("probe " + q(p200) + " --contact 82 --method cd --cd-start interior-inertial "
+                                      "--cd-max-pieces 100000 --cd-interior-share 0.001 --cd-inertial-factor 1000 "
+                                      "--cd-inertial-stages 1 --cd-inertial-halvings 0 --cd-inertial-jumps 0 "
+                                      "--threads 1 --out " + q(root_ / "share"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("the interior-point start spent its share of the budget (--cd-interior-share of "
+                          "--cd-max-pieces) before an exact solution, and the continuation in dt ended short"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("spent the budget of --cd-max-pieces"), std::string::npos) << r.output;
+}
+
 TEST_F(CliProbe, SaysWhenTheBranchFromTheStaticNetworkClosesOnItself) {
   // Contact 49 of p200-mu1 at dt = 1e-3: the branch of the step through the static network
   // turns back at ~2.3e-5 of the opening and closes on itself, at every compliance tried

@@ -475,6 +475,14 @@ void expect_same_settings(const CampaignSettings& a, const CampaignSettings& b) 
   EXPECT_EQ(a.cd.interior_states_retries, b.cd.interior_states_retries);
   EXPECT_EQ(a.cd.interior_max_iterations, b.cd.interior_max_iterations);
   EXPECT_EQ(a.cd.interior_neighbourhood, b.cd.interior_neighbourhood);
+  EXPECT_EQ(a.cd.lost_factor, b.cd.lost_factor);
+  EXPECT_EQ(a.cd.restart_floor, b.cd.restart_floor);
+  EXPECT_EQ(a.cd.interior_share, b.cd.interior_share);
+  EXPECT_EQ(a.cd.inertial_factor, b.cd.inertial_factor);
+  EXPECT_EQ(a.cd.inertial_stages, b.cd.inertial_stages);
+  EXPECT_EQ(a.cd.inertial_halvings, b.cd.inertial_halvings);
+  EXPECT_EQ(a.cd.inertial_retries, b.cd.inertial_retries);
+  EXPECT_EQ(a.cd.inertial_jumps, b.cd.inertial_jumps);
 }
 
 TEST(ProbeCampaign, SettingsComeBackFromTheirRecord) {
@@ -547,6 +555,23 @@ TEST(ProbeCampaign, SettingsComeBackFromTheirRecord) {
     s.nlgs.window = 4.0;
     s.max_inertia = 0.02;
   });
+  add_cd("cd compliant, lost factor, restart floor", CdPathStart::compliant, [](CampaignSettings& s) {
+    s.cd.lost_factor = 1e3;
+    s.cd.restart_floor = 1e-6;
+  });
+  add_cd("cd inertial", CdPathStart::inertial, [](CampaignSettings&) {});
+  add_cd("cd inertial, its continuation in dt", CdPathStart::inertial, [](CampaignSettings& s) {
+    s.cd.inertial_factor = 30.0;
+    s.cd.inertial_stages = 2;
+    s.cd.inertial_halvings = 0;
+    s.cd.inertial_retries = 3;
+    s.cd.inertial_jumps = 0;
+  });
+  add_cd("cd interior-inertial, share and factor", CdPathStart::interior_inertial, [](CampaignSettings& s) {
+    s.cd.interior_share = 0.3;
+    s.cd.inertial_factor = 3.0;
+    s.cd.max_probe_pieces = 60000;
+  });
   for (const auto& [what, s] : cases) {
     SCOPED_TRACE(what);
     const nlohmann::json j = to_json(s);
@@ -604,6 +629,36 @@ TEST(ProbeCampaign, SettingsRecordsThatUnjamWouldNotWriteAreRefused) {
   nlohmann::json without = both_json;
   without.erase("cd_interior_share");
   EXPECT_THROW((void)campaign_settings_from_json(without, p, "the record"), Error);
+  // The continuation in dt's settings: recorded only where not the default (the records made
+  // before they were settings have none, and resume with the defaults), refused on the starts
+  // without a continuation in dt and out of range.
+  EXPECT_FALSE(to_json(both).contains("cd_inertial_factor"));
+  both.cd.inertial_jumps = 2;
+  const nlohmann::json jumps = to_json(both);
+  EXPECT_EQ(jumps.at("cd_inertial_jumps").get<int>(), 2);
+  EXPECT_FALSE(jumps.contains("cd_inertial_stages"));
+  EXPECT_EQ(campaign_settings_from_json(jumps, p, "the record").cd.inertial_jumps, 2);
+  refused("the continuation in dt's setting on another start", [](nlohmann::json& j) { j["cd_inertial_factor"] = 3.0; },
+          "cd_inertial_factor");
+  refused("the continuation in dt's default written out", [](nlohmann::json& j) {
+    j["cd_start"] = "inertial";
+    j["cd_inertial_stages"] = CdPathSettings{}.inertial_stages;
+  }, "cd_inertial_stages");
+  refused("the continuation in dt's factor out of range", [](nlohmann::json& j) {
+    j["cd_start"] = "inertial";
+    j["cd_inertial_factor"] = 1.0;
+  }, "--cd-inertial-factor must be > 1");
+  {
+    CampaignSettings interior = cd;
+    interior.cd.start = CdPathStart::interior_point;
+    interior.cd.inertial_retries = 2;
+    try {
+      validate(interior);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& e) {
+      EXPECT_STREQ(e.what(), "--cd-inertial-retries applies to the cd method's inertial and interior-inertial starts only");
+    }
+  }
   refused("a cd setting on nlgs", [](nlohmann::json& j) {
     j["method"] = "nlgs";
     j["velocity_tol"] = 1e-6;

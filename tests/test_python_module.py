@@ -652,6 +652,8 @@ def test_the_cd_settings_are_one_typed_object():
     assert (d.interior_states_pieces, d.interior_states_stall, d.interior_states_retries,
             d.interior_iterations, d.interior_neighbourhood, d.settle_compliance, d.lost_factor,
             d.restart_floor, d.interior_share) == (0.1, 20, 2, 100, 0.0, 0.0, 0.0, 0.0, 0.5)
+    assert (d.inertial_factor, d.inertial_stages, d.inertial_halvings, d.inertial_retries,
+            d.inertial_jumps) == (10.0, 4, 3, 1, 8)
     s = unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert s != d and s == unjam.CdSettings(start="compliant", accept_residual=1e-4)
     assert repr(s).startswith("CdSettings(start='compliant', compliant_start=0.1, softer_starts=2, "
@@ -677,6 +679,12 @@ def test_the_cd_settings_are_one_typed_object():
                                   ("restart_floor", float("nan"), "--cd-restart-floor must be >= 0"),
                                   ("interior_share", 0.0, r"--cd-interior-share must be in \(0, 1\)"),
                                   ("interior_share", 1.0, r"--cd-interior-share must be in \(0, 1\)"),
+                                  ("inertial_factor", 1.0, "--cd-inertial-factor must be > 1 and finite"),
+                                  ("inertial_factor", float("inf"), "--cd-inertial-factor must be > 1 and finite"),
+                                  ("inertial_stages", 0, "--cd-inertial-stages must be >= 1"),
+                                  ("inertial_halvings", -1, "--cd-inertial-halvings must be >= 0"),
+                                  ("inertial_retries", -1, "--cd-inertial-retries must be >= 0"),
+                                  ("inertial_jumps", -1, "--cd-inertial-jumps must be >= 0"),
                                   ("start", "soft", "--cd-start must be static, lp, compliant, interior, inertial or interior-inertial")]:
         t = copy.copy(s)
         with pytest.raises(unjam.Error, match=message):
@@ -705,7 +713,8 @@ def test_the_cd_settings_are_one_typed_object():
     # "Settling at an exact solution"); pickled and compared with the other fields.
     settled = unjam.CdSettings(start="compliant", settle_compliance=1e-5)
     assert repr(settled).endswith("settle_compliance=1e-05, lost_factor=0.0, restart_floor=0.0, "
-                                  "interior_share=0.5)")
+                                  "interior_share=0.5, inertial_factor=10.0, inertial_stages=4, "
+                                  "inertial_halvings=3, inertial_retries=1, inertial_jumps=8)")
     assert pickle.loads(pickle.dumps(settled)) == settled
     assert settled != unjam.CdSettings(start="compliant")
     a = unjam.probe(p, contact=34, method="cd", cd=settled)
@@ -737,6 +746,18 @@ def test_the_cd_settings_are_one_typed_object():
     assert abs(half.f_crit / p.F0 - 2.844066) < 1e-6 and abs(most.f_crit / p.F0 - 2.795944) < 1e-6
     with pytest.raises(unjam.Error, match="--cd-interior-share applies to the cd method's interior-inertial start only"):
         unjam.probe(p, contact=0, method="cd", cd=unjam.CdSettings(start="interior", interior_share=0.7))
+    # the continuation in dt's settings (`--cd-inertial-*`, the inertial and interior-inertial
+    # starts only): in one stage from a tenth of dt instead of four, the same solution of contact
+    # 0; from dt / 3 its first stage is not solved within the budget, and the probe has none
+    one = unjam.probe(p, contact=0, method="cd",
+                      cd=unjam.CdSettings(start="interior-inertial", max_pieces=150, inertial_stages=1))
+    assert one.converged and abs(one.f_crit / p.F0 - 2.844066) < 1e-6
+    three = unjam.probe(p, contact=0, method="cd",
+                        cd=unjam.CdSettings(start="interior-inertial", max_pieces=150, inertial_factor=3.0))
+    assert (three.converged, three.sweeps) == (False, 151)
+    with pytest.raises(unjam.Error, match="--cd-inertial-factor applies to the cd method's inertial and interior-inertial "
+                                          "starts only"):
+        unjam.probe(p, contact=0, method="cd", cd=unjam.CdSettings(start="interior", inertial_factor=3.0))
 
 
 def test_the_exact_probe_takes_its_window_as_the_tool(p50, tmp_path):

@@ -147,6 +147,11 @@ std::string cd_failure_hint(const CdPathStats& stats, const CdPathSettings& cd) 
   if (stats.budget_spent)
     return "its paths spent the budget of --cd-max-pieces (" + std::to_string(cd.max_probe_pieces) +
            " pieces) before an exact solution; docs/probe.md, \"A budget of pieces per probe\"";
+  if (stats.failure == "share")
+    return "the interior-point start spent its share of the budget (--cd-interior-share of --cd-max-pieces) before "
+           "an exact solution, and the continuation in dt ended short of the probe's dt with the rest unspent "
+           "(a fold it did not pass: --cd-inertial-jumps, --cd-inertial-halvings); docs/probe.md, \"The interior "
+           "start first, the continuation in dt where it fails\"";
   if (start == CdPathStart::compliant && !stats.paths.empty()) {
     // The continuation: either every path from the static network stopped short of the full
     // opening, or a lowering stopped at a fold and the restarts below it found nothing better.

@@ -139,6 +139,29 @@ void add_cd_path_options(CLI::App* cmd, CdPathSettings& cd, std::string& start) 
                   "before the inertial start's continuation in dt takes the rest (in (0, 1); docs/probe.md, "
                   "\"The interior start first, the continuation in dt where it fails\")")
       ->capture_default_str();
+  // The continuation in dt of the inertial and interior-inertial starts (CdPathSettings::
+  // inertial_factor to inertial_jumps; docs/probe.md, "The quasi-static step as the limit of
+  // vanishing inertia"). Their ranges are checked by validate(CdPathSettings), as the library's.
+  cmd->add_option("--cd-inertial-factor", cd.inertial_factor,
+                  "cd, inertial and interior-inertial starts: the continuation in dt starts from the step at dt / "
+                  "this (this^2 times the inertia of its grains), > 1")
+      ->capture_default_str();
+  cmd->add_option("--cd-inertial-stages", cd.inertial_stages,
+                  "cd, inertial and interior-inertial starts: the continuation advances log dt by at most "
+                  "log(--cd-inertial-factor) / this per stage, >= 1")
+      ->capture_default_str();
+  cmd->add_option("--cd-inertial-halvings", cd.inertial_halvings,
+                  "cd, inertial and interior-inertial starts: a stage that is not exact is tried again with half "
+                  "its step in dt, up to this many times in a row before the branch counts as folded, >= 0")
+      ->capture_default_str();
+  cmd->add_option("--cd-inertial-retries", cd.inertial_retries,
+                  "cd, inertial and interior-inertial starts: where the first stage is not exact, start again at "
+                  "sqrt(10) times less dt, this many times, >= 0")
+      ->capture_default_str();
+  cmd->add_option("--cd-inertial-jumps", cd.inertial_jumps,
+                  "cd, inertial and interior-inertial starts: past a fold in dt, the interior start at the next dt "
+                  "jumps to another branch, at most this many times per probe, >= 0")
+      ->capture_default_str();
   cmd->add_option("--cd-max-pieces", cd.max_probe_pieces,
                   "cd: stop a probe once its paths together have taken this many pieces, keeping the best "
                   "solution met so far (if any; counted as stopped by the budget). Deterministic, so a campaign "

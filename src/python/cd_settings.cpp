@@ -48,6 +48,11 @@ py::dict fields(const CdPathSettings& s) {
   d["lost_factor"] = s.lost_factor;
   d["restart_floor"] = s.restart_floor;
   d["interior_share"] = s.interior_share;
+  d["inertial_factor"] = s.inertial_factor;
+  d["inertial_stages"] = s.inertial_stages;
+  d["inertial_halvings"] = s.inertial_halvings;
+  d["inertial_retries"] = s.inertial_retries;
+  d["inertial_jumps"] = s.inertial_jumps;
   return d;
 }
 
@@ -94,7 +99,9 @@ void bind_cd_settings(py::module_& m) {
   c.def(py::init([](const std::string& start, double compliant_start, int softer_starts, long long max_pieces,
                     double accept_residual, double interior_states_pieces, int interior_states_stall,
                     int interior_states_retries, int interior_iterations, double interior_neighbourhood,
-                    double settle_compliance, double lost_factor, double restart_floor, double interior_share) {
+                    double settle_compliance, double lost_factor, double restart_floor, double interior_share,
+                    double inertial_factor, int inertial_stages, int inertial_halvings, int inertial_retries,
+                    int inertial_jumps) {
           CdPathSettings s = cd_settings(start, compliant_start, softer_starts, max_pieces, accept_residual,
                                          interior_states_pieces, interior_states_stall, interior_states_retries,
                                          interior_iterations, interior_neighbourhood);
@@ -102,6 +109,11 @@ void bind_cd_settings(py::module_& m) {
           s.lost_factor = lost_factor;
           s.restart_floor = restart_floor;
           s.interior_share = interior_share;
+          s.inertial_factor = inertial_factor;
+          s.inertial_stages = inertial_stages;
+          s.inertial_halvings = inertial_halvings;
+          s.inertial_retries = inertial_retries;
+          s.inertial_jumps = inertial_jumps;
           validate(s);
           return s;
         }),
@@ -114,7 +126,10 @@ void bind_cd_settings(py::module_& m) {
         py::arg("interior_iterations") = d.interior_max_iterations,
         py::arg("interior_neighbourhood") = d.interior_neighbourhood,
         py::arg("settle_compliance") = d.settle_compliance, py::arg("lost_factor") = d.lost_factor,
-        py::arg("restart_floor") = d.restart_floor, py::arg("interior_share") = d.interior_share);
+        py::arg("restart_floor") = d.restart_floor, py::arg("interior_share") = d.interior_share,
+        py::arg("inertial_factor") = d.inertial_factor, py::arg("inertial_stages") = d.inertial_stages,
+        py::arg("inertial_halvings") = d.inertial_halvings, py::arg("inertial_retries") = d.inertial_retries,
+        py::arg("inertial_jumps") = d.inertial_jumps);
   c.def_property(
       "start", [](const CdPathSettings& s) { return std::string(cd_start_name(s.start)); },
       [](CdPathSettings& s, const std::string& name) { s.start = cd_start_from_name(name); },
@@ -162,6 +177,22 @@ void bind_cd_settings(py::module_& m) {
                 "interior-inertial start: the fraction of max_pieces the interior start may take before the "
                 "continuation in dt takes the rest, in (0, 1) (--cd-interior-share; docs/probe.md, \"The "
                 "interior start first, the continuation in dt where it fails\")");
+  checked_field(c, "inertial_factor", &CdPathSettings::inertial_factor,
+                "inertial and interior-inertial starts: the continuation in dt starts from the step at dt / this, "
+                "> 1 (--cd-inertial-factor; docs/probe.md, \"The quasi-static step as the limit of vanishing "
+                "inertia\")");
+  checked_field(c, "inertial_stages", &CdPathSettings::inertial_stages,
+                "inertial and interior-inertial starts: log dt advances by at most log(inertial_factor) / this per "
+                "stage, >= 1 (--cd-inertial-stages)");
+  checked_field(c, "inertial_halvings", &CdPathSettings::inertial_halvings,
+                "inertial and interior-inertial starts: halvings in a row of a stage's step in dt before the branch "
+                "counts as folded, >= 0 (--cd-inertial-halvings)");
+  checked_field(c, "inertial_retries", &CdPathSettings::inertial_retries,
+                "inertial and interior-inertial starts: new first stages at sqrt(10) times less dt, >= 0 "
+                "(--cd-inertial-retries)");
+  checked_field(c, "inertial_jumps", &CdPathSettings::inertial_jumps,
+                "inertial and interior-inertial starts: jumps to another branch past a fold in dt per probe, >= 0 "
+                "(--cd-inertial-jumps)");
   c.def("__repr__", &repr);
   c.def("__eq__", [](const CdPathSettings& a, const CdPathSettings& b) { return same_cd_fields(a, b); }, py::is_operator());
   c.def("__copy__", [](const CdPathSettings& s) { return s; });

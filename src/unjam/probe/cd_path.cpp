@@ -1257,6 +1257,8 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     all.inertial_fallback = true;
     sol = std::move(first);
     kept = std::move(first_stats);
+    // Its paths stopped at the share, the continuation with the rest of the budget unspent.
+    if (kept.failure == "budget" && !spent()) kept.failure = "share";
   } else if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
     all.inertial_fallback = true;
     if (!spent()) {

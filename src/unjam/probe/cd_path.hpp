@@ -245,7 +245,9 @@ struct CdPathStats {
   std::string failure;        // why there is no solution: "loop" (the branch through the
                               // start is closed), "cycle" (at a degenerate point), "ray",
                               // "pieces", "singular", "inexact" (residual above kMaxPathResidual),
-                              // "budget" (max_probe_pieces spent), "stall" (the path from the
+                              // "budget" (max_probe_pieces spent), "share" (interior_inertial:
+                              // the interior-point start's share of it spent, and the continuation
+                              // in dt ended short with the rest unspent), "stall" (the path from the
                               // interior point's states stopped gaining ground), "lost" (its
                               // forces at the full opening lost their digits; lost_factor)
   std::vector<CdPathAttempt> paths;  // every path followed, in order (paths.size() == attempts)

@@ -154,6 +154,24 @@ bool has_interior(const CampaignSettings& s) {
           s.cd.start == CdPathStart::interior_inertial);
 }
 
+// The cd method with a continuation in dt: the inertial and interior-inertial starts.
+bool has_inertial(const CampaignSettings& s) {
+  return s.method == ProbeMethod::kCd &&
+         (s.cd.start == CdPathStart::inertial || s.cd.start == CdPathStart::interior_inertial);
+}
+
+// The option of the first setting of the continuation in dt (CdPathSettings::inertial_factor
+// to inertial_jumps) that is not its default; nullptr if none.
+const char* changed_inertial_option(const CdPathSettings& cd) {
+  const CdPathSettings d;
+  if (cd.inertial_factor != d.inertial_factor) return "--cd-inertial-factor";
+  if (cd.inertial_stages != d.inertial_stages) return "--cd-inertial-stages";
+  if (cd.inertial_halvings != d.inertial_halvings) return "--cd-inertial-halvings";
+  if (cd.inertial_retries != d.inertial_retries) return "--cd-inertial-retries";
+  if (cd.inertial_jumps != d.inertial_jumps) return "--cd-inertial-jumps";
+  return nullptr;
+}
+
 // The cd method with a compliant continuation: the compliant start, or a start with the
 // interior-point start, which falls back to it (docs/probe.md, "An interior-point start").
 bool has_continuation(const CampaignSettings& s) {
@@ -263,6 +281,16 @@ void validate(const CdPathSettings& cd) {
     throw Error("--cd-interior-neighbourhood must be in [0, 1) (got " + std::to_string(cd.interior_neighbourhood) + ")");
   if (!(cd.interior_share > 0.0 && cd.interior_share < 1.0))
     throw Error("--cd-interior-share must be in (0, 1) (got " + std::to_string(cd.interior_share) + ")");
+  if (!(cd.inertial_factor > 1.0 && std::isfinite(cd.inertial_factor)))
+    throw Error("--cd-inertial-factor must be > 1 and finite (got " + std::to_string(cd.inertial_factor) + ")");
+  if (cd.inertial_stages < 1)
+    throw Error("--cd-inertial-stages must be >= 1 (got " + std::to_string(cd.inertial_stages) + ")");
+  if (cd.inertial_halvings < 0)
+    throw Error("--cd-inertial-halvings must be >= 0 (got " + std::to_string(cd.inertial_halvings) + ")");
+  if (cd.inertial_retries < 0)
+    throw Error("--cd-inertial-retries must be >= 0 (got " + std::to_string(cd.inertial_retries) + ")");
+  if (cd.inertial_jumps < 0)
+    throw Error("--cd-inertial-jumps must be >= 0 (got " + std::to_string(cd.inertial_jumps) + ")");
 }
 
 void validate(const CampaignSettings& s) {
@@ -285,6 +313,8 @@ void validate(const CampaignSettings& s) {
   if (s.cd.interior_share != CdPathSettings{}.interior_share &&
       !(s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_inertial))
     throw Error("--cd-interior-share applies to the cd method's interior-inertial start only");
+  if (const char* option = changed_inertial_option(s.cd); option && !has_inertial(s))
+    throw Error(std::string(option) + " applies to the cd method's inertial and interior-inertial starts only");
   if (s.cd.restart_floor > 0.0 && !has_continuation(s))
     throw Error("--cd-restart-floor applies to the cd method's compliant and interior starts only");
   if (s.cd.max_probe_pieces > 0 && s.method != ProbeMethod::kCd)
@@ -622,6 +652,16 @@ nlohmann::json to_json(const CampaignSettings& s) {
     }
     if (s.method == ProbeMethod::kCd && s.cd.start == CdPathStart::interior_inertial)
       j["cd_interior_share"] = s.cd.interior_share;  // recorded with the start it applies to
+    if (has_inertial(s)) {
+      // The continuation in dt: each recorded where it is not the default (the value of the
+      // checkpoints made before it was a setting, so that those still resume).
+      const CdPathSettings d;
+      if (s.cd.inertial_factor != d.inertial_factor) j["cd_inertial_factor"] = s.cd.inertial_factor;
+      if (s.cd.inertial_stages != d.inertial_stages) j["cd_inertial_stages"] = s.cd.inertial_stages;
+      if (s.cd.inertial_halvings != d.inertial_halvings) j["cd_inertial_halvings"] = s.cd.inertial_halvings;
+      if (s.cd.inertial_retries != d.inertial_retries) j["cd_inertial_retries"] = s.cd.inertial_retries;
+      if (s.cd.inertial_jumps != d.inertial_jumps) j["cd_inertial_jumps"] = s.cd.inertial_jumps;
+    }
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
     if (s.method == ProbeMethod::kCd && s.cd.accept_residual != CdPathSettings{}.accept_residual)
@@ -647,7 +687,8 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       "lp_tolerance", "M_lambda", "dt", "cd_start", "cd_softer_starts", "cd_compliant_start", "cd_interior_states_pieces",
       "cd_interior_states_stall", "cd_interior_states_retries", "cd_interior_iterations",
       "cd_interior_neighbourhood", "cd_max_pieces", "cd_accept_residual", "cd_settle_compliance",
-      "cd_lost_factor", "cd_restart_floor", "cd_interior_share", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
+      "cd_lost_factor", "cd_restart_floor", "cd_interior_share", "cd_inertial_factor", "cd_inertial_stages", "cd_inertial_halvings",
+      "cd_inertial_retries", "cd_inertial_jumps", "max_inertia_F0", "window_d", "velocity_tol", "max_sweeps"};
   for (const auto& [key, value] : j.items())
     if (kKnown.count(key) == 0) throw Error(name + " have a setting this unjam does not know: '" + key + "'");
   CampaignSettings s = campaign_settings_for(p);
@@ -681,6 +722,14 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
         s.cd.settle_compliance = number("cd_settle_compliance", 0.0);
         s.cd.lost_factor = number("cd_lost_factor", 0.0);
         if (s.cd.start == CdPathStart::interior_inertial) s.cd.interior_share = j.at("cd_interior_share").get<double>();
+      }
+      if (has_inertial(s)) {
+        const CdPathSettings d;
+        s.cd.inertial_factor = number("cd_inertial_factor", d.inertial_factor);
+        s.cd.inertial_stages = static_cast<int>(integer("cd_inertial_stages", d.inertial_stages));
+        s.cd.inertial_halvings = static_cast<int>(integer("cd_inertial_halvings", d.inertial_halvings));
+        s.cd.inertial_retries = static_cast<int>(integer("cd_inertial_retries", d.inertial_retries));
+        s.cd.inertial_jumps = static_cast<int>(integer("cd_inertial_jumps", d.inertial_jumps));
       }
       if (has_continuation(s)) {
         s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));
