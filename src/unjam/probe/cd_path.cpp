@@ -1189,9 +1189,12 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
       at.max_probe_pieces = std::max(1LL, std::llround(ps.interior_share * static_cast<double>(ps.max_probe_pieces)));
     first = probe_cd_direct(packing, contact, settings, at, &first_stats);
     account(first_stats, settings.dt);
-    all.budget_spent = ps.max_probe_pieces > 0 && used >= ps.max_probe_pieces;  // the probe's, not the share's
+    // Its statistics in terms of the probe's budget, not the share's: where its paths stopped at
+    // the share and the probe's budget is not spent, its failure is "share".
+    all.budget_spent = ps.max_probe_pieces > 0 && used >= ps.max_probe_pieces;
+    first_stats.budget_spent = all.budget_spent;
+    if (first_stats.failure == "budget" && !all.budget_spent) first_stats.failure = "share";
     if (first.f.size() > 0 && first.residual.max() <= ps.accept_residual) {
-      first_stats.budget_spent = all.budget_spent;  // the probe's budget, not the share's
       first_stats.accepted = !exact(first) && !all.budget_spent;
       first_stats.paths = std::move(paths);
       first_stats.attempts = static_cast<int>(first_stats.paths.size());
@@ -1257,8 +1260,6 @@ CdStepSolution probe_cd_inertial(const Packing& packing, int contact, const Prob
     all.inertial_fallback = true;
     sol = std::move(first);
     kept = std::move(first_stats);
-    // Its paths stopped at the share, the continuation with the rest of the budget unspent.
-    if (kept.failure == "budget" && !spent()) kept.failure = "share";
   } else if (!(exact(sol) && all.inertial_dt_reached == settings.dt)) {
     all.inertial_fallback = true;
     if (!spent()) {

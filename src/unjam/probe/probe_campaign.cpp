@@ -160,15 +160,28 @@ bool has_inertial(const CampaignSettings& s) {
          (s.cd.start == CdPathStart::inertial || s.cd.start == CdPathStart::interior_inertial);
 }
 
-// The option of the first setting of the continuation in dt (CdPathSettings::inertial_factor
-// to inertial_jumps) that is not its default; nullptr if none.
+// The continuation in dt's counts (CdPathSettings::inertial_stages to inertial_jumps): each
+// one's key in a campaign's record, its option and its least value. Its factor
+// (inertial_factor, a number > 1) is handled beside them.
+struct InertialCount {
+  const char* key;
+  const char* option;
+  int CdPathSettings::*field;
+  int least;
+};
+constexpr InertialCount kInertialCounts[] = {
+    {"cd_inertial_stages", "--cd-inertial-stages", &CdPathSettings::inertial_stages, 1},
+    {"cd_inertial_halvings", "--cd-inertial-halvings", &CdPathSettings::inertial_halvings, 0},
+    {"cd_inertial_retries", "--cd-inertial-retries", &CdPathSettings::inertial_retries, 0},
+    {"cd_inertial_jumps", "--cd-inertial-jumps", &CdPathSettings::inertial_jumps, 0}};
+
+// The option of the first setting of the continuation in dt that is not its default; nullptr
+// if none.
 const char* changed_inertial_option(const CdPathSettings& cd) {
   const CdPathSettings d;
   if (cd.inertial_factor != d.inertial_factor) return "--cd-inertial-factor";
-  if (cd.inertial_stages != d.inertial_stages) return "--cd-inertial-stages";
-  if (cd.inertial_halvings != d.inertial_halvings) return "--cd-inertial-halvings";
-  if (cd.inertial_retries != d.inertial_retries) return "--cd-inertial-retries";
-  if (cd.inertial_jumps != d.inertial_jumps) return "--cd-inertial-jumps";
+  for (const InertialCount& c : kInertialCounts)
+    if (cd.*c.field != d.*c.field) return c.option;
   return nullptr;
 }
 
@@ -283,14 +296,10 @@ void validate(const CdPathSettings& cd) {
     throw Error("--cd-interior-share must be in (0, 1) (got " + std::to_string(cd.interior_share) + ")");
   if (!(cd.inertial_factor > 1.0 && std::isfinite(cd.inertial_factor)))
     throw Error("--cd-inertial-factor must be > 1 and finite (got " + std::to_string(cd.inertial_factor) + ")");
-  if (cd.inertial_stages < 1)
-    throw Error("--cd-inertial-stages must be >= 1 (got " + std::to_string(cd.inertial_stages) + ")");
-  if (cd.inertial_halvings < 0)
-    throw Error("--cd-inertial-halvings must be >= 0 (got " + std::to_string(cd.inertial_halvings) + ")");
-  if (cd.inertial_retries < 0)
-    throw Error("--cd-inertial-retries must be >= 0 (got " + std::to_string(cd.inertial_retries) + ")");
-  if (cd.inertial_jumps < 0)
-    throw Error("--cd-inertial-jumps must be >= 0 (got " + std::to_string(cd.inertial_jumps) + ")");
+  for (const InertialCount& c : kInertialCounts)
+    if (cd.*c.field < c.least)
+      throw Error(std::string(c.option) + " must be >= " + std::to_string(c.least) + " (got " +
+                  std::to_string(cd.*c.field) + ")");
 }
 
 void validate(const CampaignSettings& s) {
@@ -657,10 +666,8 @@ nlohmann::json to_json(const CampaignSettings& s) {
       // checkpoints made before it was a setting, so that those still resume).
       const CdPathSettings d;
       if (s.cd.inertial_factor != d.inertial_factor) j["cd_inertial_factor"] = s.cd.inertial_factor;
-      if (s.cd.inertial_stages != d.inertial_stages) j["cd_inertial_stages"] = s.cd.inertial_stages;
-      if (s.cd.inertial_halvings != d.inertial_halvings) j["cd_inertial_halvings"] = s.cd.inertial_halvings;
-      if (s.cd.inertial_retries != d.inertial_retries) j["cd_inertial_retries"] = s.cd.inertial_retries;
-      if (s.cd.inertial_jumps != d.inertial_jumps) j["cd_inertial_jumps"] = s.cd.inertial_jumps;
+      for (const InertialCount& c : kInertialCounts)
+        if (s.cd.*c.field != d.*c.field) j[c.key] = s.cd.*c.field;
     }
     if (s.method == ProbeMethod::kCd && s.cd.max_probe_pieces > 0)
       j["cd_max_pieces"] = s.cd.max_probe_pieces;  // recorded where set, as cd_start
@@ -726,10 +733,7 @@ CampaignSettings campaign_settings_from_json(const nlohmann::json& j, const Pack
       if (has_inertial(s)) {
         const CdPathSettings d;
         s.cd.inertial_factor = number("cd_inertial_factor", d.inertial_factor);
-        s.cd.inertial_stages = static_cast<int>(integer("cd_inertial_stages", d.inertial_stages));
-        s.cd.inertial_halvings = static_cast<int>(integer("cd_inertial_halvings", d.inertial_halvings));
-        s.cd.inertial_retries = static_cast<int>(integer("cd_inertial_retries", d.inertial_retries));
-        s.cd.inertial_jumps = static_cast<int>(integer("cd_inertial_jumps", d.inertial_jumps));
+        for (const InertialCount& c : kInertialCounts) s.cd.*c.field = static_cast<int>(integer(c.key, d.*c.field));
       }
       if (has_continuation(s)) {
         s.cd.softer_starts = static_cast<int>(integer("cd_softer_starts", 0));
